@@ -1,0 +1,81 @@
+#include "core/heightmap.h"
+
+#include "core/error.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+
+namespace oblong {
+
+HeightMap::HeightMap(int width, int height, std::vector<float> texels, std::string name)
+    : w_(width), h_(height), texels_(std::move(texels)), name_(std::move(name)) {
+  if (w_ <= 0 || h_ <= 0) fail(name_, "height map has size {}x{}", w_, h_);
+  if (texels_.size() != size_t(w_) * size_t(h_))
+    fail(name_, "height map has {} texels, expected {}x{}", texels_.size(), w_, h_);
+  for (size_t k = 0; k < texels_.size(); ++k)
+    if (!std::isfinite(texels_[k]))
+      fail(name_, "non-finite height at texel ({}, {})", k % size_t(w_), k / size_t(w_));
+}
+
+HeightMap HeightMap::load(const std::string& path, bool flipV) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    std::string err = OIIO::geterror();
+    if (err.empty()) err = "cannot open image";
+    // OIIO prefixes its messages with the file name already in some versions.
+    fail(path, "cannot read displacement map ({})", err);
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+    fail(path, "image has no pixels");
+  if (spec.depth > 1) fail(path, "3D (volume) images are not displacement maps");
+  std::vector<float> texels(size_t(spec.width) * size_t(spec.height));
+  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, texels.data()))
+    fail(path, "cannot read pixels ({})", in->geterror());
+  in->close();
+  if (flipV) {
+    for (int j = 0; j < spec.height / 2; ++j)
+      std::swap_ranges(texels.begin() + size_t(j) * spec.width,
+                       texels.begin() + size_t(j + 1) * spec.width,
+                       texels.begin() + size_t(spec.height - 1 - j) * spec.width);
+  }
+  return HeightMap(spec.width, spec.height, std::move(texels), path);
+}
+
+Interval HeightMap::range() const {
+  Interval r;
+  for (float t : texels_) r.extend(t);
+  return r;
+}
+
+float Displacement::bilinear(const vec2& uv) const {
+  const dvec2 s = toSample(uv);
+  const double fi = std::floor(s.x), fj = std::floor(s.y);
+  const int i = int(fi), j = int(fj);
+  const float fx = float(s.x - fi), fy = float(s.y - fj);
+  const float h00 = map->at(i, j), h10 = map->at(i + 1, j);
+  const float h01 = map->at(i, j + 1), h11 = map->at(i + 1, j + 1);
+  const float H = (1 - fy) * ((1 - fx) * h00 + fx * h10) + fy * ((1 - fx) * h01 + fx * h11);
+  return scale * (H + bias);
+}
+
+float Displacement::microAtSample(const dvec2& s) const {
+  const double fi = std::floor(s.x), fj = std::floor(s.y);
+  const int i = int(fi), j = int(fj);
+  const float fx = float(s.x - fi), fy = float(s.y - fj);
+  const float h00 = map->at(i, j), h11 = map->at(i + 1, j + 1);
+  float H;
+  if (fx >= fy) {  // lower triangle (i,j), (i+1,j), (i+1,j+1)
+    const float h10 = map->at(i + 1, j);
+    H = h00 + fx * (h10 - h00) + fy * (h11 - h10);
+  } else {  // upper triangle (i,j), (i+1,j+1), (i,j+1)
+    const float h01 = map->at(i, j + 1);
+    H = h00 + fy * (h01 - h00) + fx * (h11 - h01);
+  }
+  return scale * (H + bias);
+}
+
+float Displacement::micro(const vec2& uv) const { return microAtSample(toSample(uv)); }
+
+}  // namespace oblong

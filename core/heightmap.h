@@ -1,0 +1,85 @@
+// Displacement maps (DESIGN §1). A HeightMap holds the first channel of an image as
+// float texels; a Displacement adds scale, bias and tiling and evaluates heights:
+//   h(uv) = scale · (H(tiling ⊙ uv) + bias),
+// H bilinear with texel centres at ((i+½)/W, (j+½)/H) and wrap addressing.
+// Texel (i, j) is column i, row j of the file as read (row 0 = first scanline), so
+// v = 0 is the image's top edge unless the scene asks for flip_v.
+#pragma once
+
+#include "core/math.h"
+#include "core/memory.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace oblong {
+
+class HeightMap {
+ public:
+  HeightMap() = default;
+  HeightMap(int width, int height, std::vector<float> texels, std::string name = "<memory>");
+
+  // Reads the first channel of any image OpenImageIO can read (8/16-bit integer as
+  // [0,1], signed 16-bit as [-1,1], float as is). Errors name the file.
+  static HeightMap load(const std::string& path, bool flipV = false);
+
+  int width() const { return w_; }
+  int height() const { return h_; }
+  const std::string& name() const { return name_; }
+  const std::vector<float>& texels() const { return texels_; }
+
+  // Texel with wrap (repeat) addressing; i, j may be any integers.
+  float at(int i, int j) const { return texels_[size_t(wrap(j, h_)) * w_ + wrap(i, w_)]; }
+  // Texel without wrapping (0 <= i < W, 0 <= j < H).
+  float atUnchecked(int i, int j) const { return texels_[size_t(j) * w_ + i]; }
+
+  Interval range() const;  // min and max texel
+  size_t bytes() const { return texels_.size() * sizeof(float); }
+
+  static int wrap(int i, int n) {
+    const int r = i % n;
+    return r < 0 ? r + n : r;
+  }
+
+ private:
+  int w_ = 0, h_ = 0;
+  std::vector<float> texels_;
+  std::string name_;
+};
+
+// A map applied to a mesh: scale, bias and tiling (DESIGN §1).
+struct Displacement {
+  std::shared_ptr<const HeightMap> map;
+  float scale = 1.0f;
+  float bias = 0.0f;
+  vec2 tiling{1.0f, 1.0f};
+
+  // Continuous sample coordinates of a uv: the texel centre of texel (i, j) is (i, j).
+  dvec2 toSample(const vec2& uv) const {
+    return {double(uv.x) * double(tiling.x) * map->width() - 0.5,
+            double(uv.y) * double(tiling.y) * map->height() - 0.5};
+  }
+  // uv of the sample point (i, j) (inverse of toSample).
+  vec2 sampleToUV(double i, double j) const {
+    return vec2(float((i + 0.5) / (double(map->width()) * tiling.x)),
+                float((j + 0.5) / (double(map->height()) * tiling.y)));
+  }
+
+  // Height of one sample point (grid vertex of the micro-geometry).
+  float sampleHeight(int i, int j) const { return scale * (map->at(i, j) + bias); }
+  // Raw texel interval -> height interval (scale may be negative).
+  Interval toHeight(const Interval& raw) const {
+    const float a = scale * (raw.lo + bias), b = scale * (raw.hi + bias);
+    return {std::min(a, b), std::max(a, b)};
+  }
+
+  // The smooth surface's height: bilinear in the texels.
+  float bilinear(const vec2& uv) const;
+  // The micro-geometry's height: piecewise linear on the two triangles of each grid
+  // cell split by the diagonal (i,j)-(i+1,j+1). Equal to bilinear() at grid points.
+  float micro(const vec2& uv) const;
+  float microAtSample(const dvec2& s) const;
+};
+
+}  // namespace oblong

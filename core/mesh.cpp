@@ -1,0 +1,196 @@
+#include "core/mesh.h"
+
+#include "core/error.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include <bit>
+#include <cstring>
+#include <filesystem>
+#include <unordered_map>
+
+namespace oblong {
+
+DisplacedTriangle Mesh::triangle(size_t i) const {
+  DisplacedTriangle t;
+  const glm::uvec3& f = triangles[i];
+  for (int k = 0; k < 3; ++k) {
+    t.p[k] = positions[f[k]];
+    t.n[k] = normals[f[k]];
+    t.t[k] = hasUVs() ? uvs[f[k]] : vec2(0.0f);
+  }
+  t.prepare();  // the caller decides what to do with an undisplaceable triangle
+  return t;
+}
+
+size_t Mesh::bytes() const {
+  return positions.size() * sizeof(vec3) + normals.size() * sizeof(vec3) + uvs.size() * sizeof(vec2) +
+         triangles.size() * sizeof(glm::uvec3);
+}
+
+namespace {
+
+// Exact float equality of positions. +0 and -0 compare equal, so they must hash equal.
+struct PositionHash {
+  size_t operator()(const vec3& p) const {
+    size_t h = 0;
+    for (int a = 0; a < 3; ++a) {
+      const uint32_t bits = std::bit_cast<uint32_t>(p[a] + 0.0f);  // -0 + 0 = +0
+      h = h * 0x9E3779B97F4A7C15ull + bits;
+    }
+    return h ^ (h >> 29);
+  }
+};
+
+bool isZeroOrBad(const vec3& n) {
+  const float l2 = glm::dot(n, n);
+  return !(l2 > 0.0f) || !std::isfinite(l2);
+}
+
+// Area-weighted vertex normals: the unnormalised cross product of each triangle (twice
+// its area) is summed per distinct position, so vertices split at uv seams (same
+// position, different uv) get one normal. Double accumulation keeps big meshes exact
+// enough. Vertices whose sum vanishes get a zero vector; `used` marks vertices of at
+// least one non-degenerate triangle (for them a zero normal is an error).
+std::vector<vec3> smoothNormals(const Mesh& m, std::vector<bool>& used) {
+  std::unordered_map<vec3, uint32_t, PositionHash> group;
+  std::vector<uint32_t> groupOf(m.positions.size());
+  for (size_t v = 0; v < m.positions.size(); ++v)
+    groupOf[v] = group.try_emplace(m.positions[v], uint32_t(group.size())).first->second;
+  std::vector<dvec3> sum(group.size(), dvec3(0.0));
+  used.assign(m.positions.size(), false);
+  for (const glm::uvec3& f : m.triangles) {
+    const dvec3 p0(m.positions[f[0]]), p1(m.positions[f[1]]), p2(m.positions[f[2]]);
+    const dvec3 c = glm::cross(p1 - p0, p2 - p0);
+    if (c == dvec3(0.0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      sum[groupOf[f[k]]] += c;
+      used[f[k]] = true;
+    }
+  }
+  std::vector<vec3> n(m.positions.size());
+  for (size_t v = 0; v < n.size(); ++v) {
+    const dvec3 s = sum[groupOf[v]];
+    const double l = glm::length(s);
+    n[v] = l > 0.0 ? vec3(s / l) : vec3(0.0f);
+  }
+  return n;
+}
+
+// Replaces zero or non-finite normals by smooth ones; errors if that still leaves a
+// zero normal on a vertex of a non-degenerate triangle (its triangles' normals cancel).
+// Vertices only used by degenerate triangles get +z: those triangles are never
+// displaced (prepare() rejects them), the normal just has to be unit length.
+void fixNormals(Mesh& m) {
+  std::vector<size_t> bad;
+  for (size_t v = 0; v < m.normals.size(); ++v)
+    if (isZeroOrBad(m.normals[v])) bad.push_back(v);
+    else m.normals[v] = glm::normalize(m.normals[v]);
+  if (bad.empty()) return;
+  std::vector<bool> used;
+  const std::vector<vec3> smooth = smoothNormals(m, used);
+  for (size_t v : bad) {
+    if (!isZeroOrBad(smooth[v])) {
+      m.normals[v] = smooth[v];
+    } else if (!used[v]) {
+      m.normals[v] = vec3(0.0f, 0.0f, 1.0f);
+    } else {
+      const vec3& p = m.positions[v];
+      fail(m.name, "vertex {} at ({}, {}, {}) has a zero normal (the normals of its triangles cancel)", v, p.x,
+           p.y, p.z);
+    }
+  }
+}
+
+}  // namespace
+
+void computeSmoothNormals(Mesh& m) {
+  m.normals.assign(m.positions.size(), vec3(0.0f));
+  fixNormals(m);
+}
+
+void transformMesh(Mesh& m, const glm::mat4& transform) {
+  const glm::mat3 l(transform);
+  const float det = glm::determinant(l);
+  if (!(det != 0.0f) || !std::isfinite(det)) fail(m.name, "transform is singular or not finite");
+  const glm::mat3 normalMatrix = glm::inverseTranspose(l);
+  for (vec3& p : m.positions) {
+    const vec4 q = transform * vec4(p, 1.0f);
+    p = vec3(q) / q.w;
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      fail(m.name, "transform produces a non-finite position");
+  }
+  for (vec3& n : m.normals) n = glm::normalize(normalMatrix * n);
+  // A mirroring transform flips the geometric normal (cross product) against the vertex
+  // normals; swapping two indices keeps the winding consistent with the normals.
+  if (det < 0.0f)
+    for (glm::uvec3& f : m.triangles) std::swap(f[1], f[2]);
+}
+
+Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, "file not found");
+  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+
+  Assimp::Importer importer;
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                  aiProcess_PreTransformVertices | aiProcess_SortByPType);
+  if (!scene) {
+    std::string err = importer.GetErrorString();
+    // One line: assimp's messages sometimes end with a newline.
+    std::replace(err.begin(), err.end(), '\n', ' ');
+    while (!err.empty() && err.back() == ' ') err.pop_back();
+    fail(path, "cannot load mesh ({})", err.empty() ? "unknown error" : err);
+  }
+
+  Mesh m;
+  m.name = path;
+  bool allUVs = true;
+  for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
+    const aiMesh* am = scene->mMeshes[mi];
+    // SortByPType separates points and lines, which are of no use to a ray tracer of
+    // surfaces: they are dropped here (and below, face by face) rather than with
+    // AI_CONFIG_PP_SBP_REMOVE, which turns a file of lines into an opaque
+    // "No meshes remaining" error.
+    if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) || am->mNumFaces == 0) continue;
+    if (!am->HasTextureCoords(0)) allUVs = false;
+    const uint32_t base = uint32_t(m.positions.size());
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      const aiVector3D& p = am->mVertices[v];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        fail(path, "non-finite vertex position ({}, {}, {})", p.x, p.y, p.z);
+      m.positions.emplace_back(p.x, p.y, p.z);
+      // A missing normal is stored as zero and filled in by fixNormals.
+      m.normals.push_back(am->HasNormals() ? vec3(am->mNormals[v].x, am->mNormals[v].y, am->mNormals[v].z)
+                                           : vec3(0.0f));
+      if (am->HasTextureCoords(0)) {
+        const aiVector3D& t = am->mTextureCoords[0][v];
+        if (!std::isfinite(t.x) || !std::isfinite(t.y))
+          fail(path, "non-finite texture coordinate ({}, {})", t.x, t.y);
+        m.uvs.emplace_back(t.x, t.y);
+      } else {
+        m.uvs.emplace_back(0.0f);
+      }
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      m.triangles.emplace_back(base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]);
+    }
+  }
+  if (m.triangles.empty()) fail(path, "mesh has no triangles");
+  if (!allUVs) {
+    if (opts.needUVs) fail(path, "mesh has no texture coordinates (needed for displacement)");
+    m.uvs.clear();  // partial uvs are useless without displacement
+  }
+  fixNormals(m);
+  if (opts.transform != glm::mat4(1.0f)) transformMesh(m, opts.transform);
+  return m;
+}
+
+}  // namespace oblong

@@ -1,0 +1,61 @@
+// Scenes: meshes (optionally displaced), a camera, lights and the strategy choice by
+// name. The JSON format is documented in docs/scene_format.md.
+#pragma once
+
+#include "core/heightmap.h"
+#include "core/mesh.h"
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace oblong {
+
+struct SceneMesh {
+  Mesh mesh;
+  std::optional<Displacement> displacement;  // none: a plain triangle mesh
+  vec3 albedo{0.7f};
+};
+
+struct Camera {
+  vec3 from{0.0f, 0.0f, 5.0f};
+  vec3 to{0.0f};
+  vec3 up{0.0f, 1.0f, 0.0f};
+  float fovY = 40.0f;  // degrees
+};
+
+struct Light {
+  enum class Type { Point, Directional } type = Type::Directional;
+  vec3 position{0.0f};          // point lights
+  vec3 direction{0.0f, -1.0f, 0.0f};  // directional lights: direction the light travels
+  vec3 intensity{1.0f};
+};
+
+// A strategy chosen by name with its parameters (validated when it is created).
+struct StrategyChoice {
+  std::string name;
+  nlohmann::json params = nlohmann::json::object();
+  std::string where;  // "scene.json: strategies.range" for error messages
+};
+
+struct Scene {
+  std::string path;  // file it came from ("<default>" for the built-in scene)
+  std::vector<SceneMesh> meshes;
+  Camera camera;
+  std::vector<Light> lights;
+  StrategyChoice range{"rmip", nlohmann::json::object(), "<default>: strategies.range"};
+  ivec2 imageSize{640, 480};
+};
+
+// Parses a scene file; every problem (missing file, malformed JSON, unknown key,
+// wrong type, nonsense value, unknown strategy name) throws oblong::Error naming the
+// file and the key.
+Scene loadScene(const std::string& path);
+Scene parseScene(const nlohmann::json& j, const std::string& path);
+
+// The built-in default scene: no data files (procedural map, generated meshes).
+Scene defaultScene();
+
+}  // namespace oblong

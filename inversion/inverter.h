@@ -1,0 +1,166 @@
+// Inverter (DESIGN §2, invariant 3): point-wise inversion of the displaced-surface map
+// of one base triangle (RMIP paper §4.1, Eq. 2). Given a 3D point X, find (u, v, h) with
+//
+//     X = P(u,v) + h · N(u,v) / |N(u,v)|        b = (1-u-v, u, v)
+//
+// All inverters solve the equivalent 3x3 system in (u, v, s)
+//
+//     F(u,v,s) = P(u,v) + s · N(u,v) − X = 0,   h = s · |N(u,v)|,
+//
+// whose solutions are exactly the points of the offset triangles p_i + s·n_i (the
+// bounding prism of T for heights [hmin,hmax] is the image of T × [a,b], DESIGN
+// invariant 2). The result is the barycentric pair (u,v), the texture coordinates
+// T.UV(u,v), the height h, whether the solver converged and how many iterations it took.
+//
+// Strategies (one name everywhere: registry key, file, test tag, stats prefix):
+//   newton  inversion/newton.h  Newton on F, float or double (the RMIP choice)
+//   cubic   inversion/cubic.h   analytic: X on the offset triangle ⇒ cubic in s
+//   ceres   inversion/ceres.h   Ceres autodiff in double: the correctness reference
+//                               (library oblong_ceres; the only code that links Ceres)
+//
+// Concrete strategies are `final` classes deriving from InverterImpl<Self>: invert()
+// and invertD() are the virtual entry points (final, so a call through the concrete
+// type is devirtualised), and Self::invertFast / invertFastD are inline, non-virtual
+// templates for the templated traversal.
+//
+// What "inside T" means for a result: u >= -eps, v >= -eps, u + v <= 1 + eps. For X
+// inside T's prism with a single, well-posed preimage in T (docs/inversion.md: folded
+// prisms and collapsing offset triangles are ambiguous), newton (with its default cubic
+// fallback), cubic and ceres return a uv inside T within eps = 1e-9 in double; the float
+// API adds the rounding of X (1e-5 on smooth meshes near the origin).
+#pragma once
+
+#include "core/math.h"
+#include "core/params.h"
+#include "core/triangle.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace oblong {
+
+template <typename S>
+struct InversionResultT {
+  glm::vec<2, S> bary{S(0)};  // (u, v): barycentrics b = (1-u-v, u, v)
+  glm::vec<2, S> uv{S(0)};    // texture coordinates T.UV(u, v)
+  S h = S(0);                 // height along N/|N|
+  bool converged = false;
+  int iterations = 0;
+
+  // u >= -eps, v >= -eps, u + v <= 1 + eps.
+  bool insideT(S eps = S(0)) const {
+    return bary.x >= -eps && bary.y >= -eps && bary.x + bary.y <= S(1) + eps;
+  }
+  // How far outside T in barycentric units (0 inside).
+  S outside() const { return std::max({S(0), -bary.x, -bary.y, bary.x + bary.y - S(1)}); }
+};
+using InversionResult = InversionResultT<float>;
+using InversionResultD = InversionResultT<double>;
+
+class Inverter {
+ public:
+  virtual ~Inverter() = default;
+  virtual std::string_view name() const = 0;
+  // Float entry point (the traversal's). Arithmetic precision is the strategy's choice
+  // (parameter "precision" for newton and cubic; ceres always works in double).
+  virtual InversionResult invert(const vec3& X, const DisplacedTriangle& T) const = 0;
+  // Double-precision entry point: X in double, all arithmetic in double.
+  virtual InversionResultD invertD(const dvec3& X, const DisplacedTriangle& T) const = 0;
+};
+
+template <typename Self>
+class InverterImpl : public Inverter {
+ public:
+  InversionResult invert(const vec3& X, const DisplacedTriangle& T) const final {
+    return static_cast<const Self*>(this)->invertFast(X, T);
+  }
+  InversionResultD invertD(const dvec3& X, const DisplacedTriangle& T) const final {
+    return static_cast<const Self*>(this)->invertFastD(X, T);
+  }
+};
+
+struct InverterContext {};
+using InverterRegistry = Registry<Inverter, InverterContext>;
+
+// Creates an inverter by name ("newton", "cubic", and "ceres" once
+// registerCeresInverter() from inversion/ceres.h has run); unknown names and unused
+// parameters throw oblong::Error naming params.where().
+std::unique_ptr<Inverter> createInverter(const std::string& name, ParamSet& params,
+                                         const InverterContext& ctx = {});
+std::unique_ptr<Inverter> createInverter(const std::string& name);
+std::vector<std::string> inverterNames();
+InverterRegistry& inverterRegistry();  // with newton and cubic registered
+
+// Reads the "precision" parameter: "float" (default) or "double".
+bool readDoublePrecision(ParamSet& ps, std::string_view strategy);
+
+namespace inv {
+
+// T in a local frame at p0, in scalar S: F(u,v,s) = e1 u + e2 v + s N(u,v) − W with
+// W = X − p0 (computing W first keeps float accuracy for triangles far from the origin).
+template <typename S>
+struct Frame {
+  using V = glm::vec<3, S>;
+  V e1, e2, n0, f1, f2;  // p1-p0, p2-p0, n0, n1-n0, n2-n0
+  S L;                   // length scale: the longest edge
+
+  explicit Frame(const DisplacedTriangle& T)
+      : e1(V(T.p[1]) - V(T.p[0])),
+        e2(V(T.p[2]) - V(T.p[0])),
+        n0(V(T.n[0])),
+        f1(V(T.n[1]) - V(T.n[0])),
+        f2(V(T.n[2]) - V(T.n[0])) {
+    const V e3 = e2 - e1;
+    L = std::sqrt(std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)}));
+  }
+  V N(S u, S v) const { return n0 + u * f1 + v * f2; }
+  V residual(S u, S v, S s, const V& W) const { return e1 * u + e2 * v + s * N(u, v) - W; }
+};
+
+template <typename S>
+inline S det3(const glm::vec<3, S>& a, const glm::vec<3, S>& b, const glm::vec<3, S>& c) {
+  return glm::dot(a, glm::cross(b, c));
+}
+
+// One Newton step on F at (u,v,s) (Cramer's rule on J = [e1 + s f1, e2 + s f2, N]).
+// Returns false (and leaves the state) when J is singular or the step is not finite.
+template <typename S>
+inline bool newtonStep(const Frame<S>& F, const glm::vec<3, S>& W, S& u, S& v, S& s, S& du, S& dv,
+                       S& ds) {
+  using V = glm::vec<3, S>;
+  const V N = F.N(u, v);
+  const V r = F.e1 * u + F.e2 * v + s * N - W;
+  const V a = F.e1 + s * F.f1, b = F.e2 + s * F.f2;
+  const V bxN = glm::cross(b, N);
+  const S D = glm::dot(a, bxN);
+  if (!(std::abs(D) > S(0))) return false;
+  const S inv = S(1) / D;
+  du = -glm::dot(r, bxN) * inv;
+  dv = -glm::dot(a, glm::cross(r, N)) * inv;
+  ds = -glm::dot(a, glm::cross(b, r)) * inv;
+  if (!std::isfinite(du) || !std::isfinite(dv) || !std::isfinite(ds)) return false;
+  u += du, v += dv, s += ds;
+  return true;
+}
+
+// Fills the result from (u,v,s): h = s·|N(u,v)|, uv = T.UV(u,v) (in S).
+template <typename S>
+inline InversionResultT<S> finish(const Frame<S>& F, const DisplacedTriangle& T, S u, S v, S s,
+                                  bool converged, int iterations) {
+  InversionResultT<S> r;
+  r.bary = {u, v};
+  using V2 = glm::vec<2, S>;
+  r.uv = (S(1) - u - v) * V2(T.t[0]) + u * V2(T.t[1]) + v * V2(T.t[2]);
+  r.h = s * glm::length(F.N(u, v));
+  r.converged = converged && std::isfinite(u) && std::isfinite(v) && std::isfinite(r.h);
+  r.iterations = iterations;
+  return r;
+}
+
+}  // namespace inv
+
+}  // namespace oblong

@@ -1,0 +1,23 @@
+// RGB float images written through OpenImageIO: PNG/JPEG get sRGB-encoded 8-bit,
+// EXR/HDR/TIFF float keep linear values.
+#pragma once
+
+#include "core/math.h"
+
+#include <string>
+#include <vector>
+
+namespace oblong {
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<vec3> pixels;  // row-major, row 0 at the top
+  Image(int w, int h) : width(w), height(h), pixels(size_t(w) * h, vec3(0.0f)) {}
+  vec3& at(int x, int y) { return pixels[size_t(y) * width + x]; }
+  const vec3& at(int x, int y) const { return pixels[size_t(y) * width + x]; }
+};
+
+// Throws oblong::Error naming the file when it cannot be written.
+void writeImage(const Image& img, const std::string& path);
+
+}  // namespace oblong

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs the dependencies, builds oblong (Release, and ASan+UBSan), and runs the
+# unit tests through CTest in both builds.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+jobs=$(nproc)
+
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j "$jobs"
+(cd build && ctest --output-on-failure -j "$jobs")
+
+if [ "${OBLONG_SKIP_SANITIZERS:-0}" != 1 ]; then
+  # Sanitizer build: unit tests only (benchmarks off), statistics on.
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DOBLONG_SANITIZE=ON \
+    -DOBLONG_BUILD_BENCHMARKS=OFF
+  cmake --build build-asan -j "$jobs"
+  (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --output-on-failure -j "$jobs")
+fi

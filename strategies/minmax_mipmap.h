@@ -1,0 +1,84 @@
+// minmax_mipmap: the min-max mipmap of TFDM (Thonat et al. 2021), after Greene et al.
+// and Oh et al. (pyramidal displacement mapping). Level 0 is the samples; node (i,j) of
+// level k covers samples [i 2^k, (i+1) 2^k - 1] x [j 2^k, (j+1) 2^k - 1], clipped to the
+// map for sizes that are not powers of two. A range is bounded by the nodes of the
+// smallest level at which it spans at most two nodes per axis (up to four neighbouring
+// nodes); ranges crossing the border are split into non-crossing pieces.
+//
+// Parameters: none.
+//
+// Levels are built only up to the one where two nodes cover QueryNeeds' largest extent
+// (DESIGN invariant 4); larger ranges use all the top built level's nodes they touch.
+// Level 0 is read from the map itself (no copy). node()/levels() are the interface of
+// the mipmap-aligned quad-tree splitter (TFDM configuration).
+#pragma once
+
+#include "core/stats.h"
+#include "strategies/range_query.h"
+
+#include <bit>
+
+namespace oblong {
+
+OBLONG_STAT_COUNTER("minmax_mipmap/Queries", mmQueries);
+OBLONG_STAT_COUNTER("minmax_mipmap/Nodes", mmNodes);
+
+class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
+ public:
+  MinMaxMipmap(const Displacement& d, const QueryNeeds& needs);
+
+  std::string_view name() const override { return "minmax_mipmap"; }
+  size_t bytes() const override { return data_.size() * sizeof(Interval) + offset_.size() * sizeof(size_t); }
+  MemoryReport memory() const override {
+    return {{"minmax_mipmap/levels", data_.size() * sizeof(Interval)},
+            {"minmax_mipmap/level_table", offset_.size() * sizeof(size_t)}};
+  }
+  bool exact() const override { return false; }
+
+  // Levels 0..levels()-1 (level 0 = samples). Level k is levelWidth(k) x levelHeight(k).
+  int levels() const { return K_ + 1; }
+  int levelWidth(int k) const { return ((map().width() - 1) >> k) + 1; }
+  int levelHeight(int k) const { return ((map().height() - 1) >> k) + 1; }
+  // Raw min/max of node (i,j) of level k (0 <= i < levelWidth(k), 0 <= j < levelHeight(k)).
+  Interval node(int k, int i, int j) const {
+    if (k == 0) {
+      const float t = map().atUnchecked(i, j);
+      return {t, t};
+    }
+    return data_[offset_[k - 1] + size_t(j) * levelWidth(k) + i];
+  }
+
+  Interval rawRange(const SampleRange& r) const {
+    OBLONG_STAT_INC(mmQueries);
+    const AxisPieces px = splitAxis(r.x0, r.x1, map().width()), py = splitAxis(r.y0, r.y1, map().height());
+    Interval out;
+    for (int b = 0; b < py.count; ++b)
+      for (int a = 0; a < px.count; ++a) out.extend(piece(px.lo[a], px.hi[a], py.lo[b], py.hi[b]));
+    return out;
+  }
+
+ private:
+  // Smallest level with x0>>k and x1>>k at most one apart: the highest bit where the
+  // two differ, ignoring a difference of exactly one node.
+  static int levelFor(int a0, int a1) {
+    int k = 0;
+    while ((a1 >> k) - (a0 >> k) > 1) ++k;
+    return k;
+  }
+  Interval piece(int x0, int x1, int y0, int y1) const {
+    const int k = std::min(std::max(levelFor(x0, x1), levelFor(y0, y1)), K_);
+    Interval out;
+    for (int j = y0 >> k; j <= y1 >> k; ++j)
+      for (int i = x0 >> k; i <= x1 >> k; ++i) {
+        OBLONG_STAT_INC(mmNodes);
+        out.extend(node(k, i, j));
+      }
+    return out;
+  }
+
+  int K_ = 0;                   // top built level
+  std::vector<size_t> offset_;  // offset of level k >= 1 in data_ at [k-1]
+  std::vector<Interval> data_;
+};
+
+}  // namespace oblong

@@ -1,0 +1,73 @@
+// RangeQuery registry, brute-force oracle and QueryNeeds (see range_query.h and
+// docs/range_query.md). Strategies are registered explicitly here: a static
+// self-registering object in a strategy's .cpp would be dropped by the static-library
+// linker when nothing else references that object file.
+#include "strategies/range_query.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+
+namespace oblong {
+
+void registerRmip(RangeQueryRegistry& r);
+void registerMinMaxMipmap(RangeQueryRegistry& r);
+void registerSafetyZones(RangeQueryRegistry& r);
+
+namespace {
+RangeQueryRegistry& registry() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    auto& r = RangeQueryRegistry::instance();
+    registerRmip(r);
+    registerMinMaxMipmap(r);
+    registerSafetyZones(r);
+  });
+  return RangeQueryRegistry::instance();
+}
+}  // namespace
+
+std::unique_ptr<RangeQuery> createRangeQuery(const std::string& name, ParamSet& params,
+                                             const RangeQueryContext& ctx) {
+  if (!ctx.displacement.map) fail(params.where(), "range query '{}' needs a displacement map", name);
+  return registry().create(name, params, ctx);
+}
+
+std::vector<std::string> rangeQueryNames() { return registry().names(); }
+
+Interval bruteForceRange(const HeightMap& m, const SampleRange& r) {
+  const AxisPieces px = splitAxis(r.x0, r.x1, m.width()), py = splitAxis(r.y0, r.y1, m.height());
+  Interval out;
+  for (int a = 0; a < py.count; ++a)
+    for (int j = py.lo[a]; j <= py.hi[a]; ++j)
+      for (int b = 0; b < px.count; ++b)
+        for (int i = px.lo[b]; i <= px.hi[b]; ++i) out.extend(m.atUnchecked(i, j));
+  return out;
+}
+
+void throwLodUnsupported(std::string_view strategy, float lod) {
+  fail(std::string(strategy), "level of detail {} requested, but only lod 0 is supported", lod);
+}
+
+QueryNeeds QueryNeeds::forRects(const Displacement& d, const std::vector<Rect>& uvBoxes) {
+  QueryNeeds n;
+  const int W = d.map->width(), H = d.map->height();
+  // Same snap as RangeQuery::snap; clamped in double first so huge tilings cannot
+  // overflow int (an extent beyond W+1 means "whole axis" to every strategy anyway).
+  constexpr double eps = 1e-5, lim = 1e9;
+  auto lo = [&](double v) { return int(std::clamp(std::floor(v - eps), -lim, lim)); };
+  auto hi = [&](double v) { return int(std::clamp(std::ceil(v + eps), -lim, lim)); };
+  for (const Rect& r : uvBoxes) {
+    if (r.isEmpty()) continue;
+    const dvec2 a = d.toSample(r.lo), b = d.toSample(r.hi);
+    const int x0 = lo(a.x), y0 = lo(a.y), x1 = hi(b.x), y1 = hi(b.y);
+    n.maxExtentX = std::max(n.maxExtentX, int(std::min<int64_t>(int64_t(x1) - x0 + 1, W + 1)));
+    n.maxExtentY = std::max(n.maxExtentY, int(std::min<int64_t>(int64_t(y1) - y0 + 1, H + 1)));
+    if (x0 < 0 || y0 < 0 || x1 > W - 1 || y1 > H - 1) n.wrap = true;
+  }
+  return n;
+}
+
+}  // namespace oblong

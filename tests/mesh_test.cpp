@@ -1,0 +1,233 @@
+#include "core/error.h"
+#include "core/mesh.h"
+#include "test_util.h"
+
+#include <catch2/catch.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <tuple>
+
+using namespace oblong;
+using Catch::Matchers::Contains;
+
+namespace {
+
+std::string writeFile(const std::string& name, const std::string& text) {
+  const std::string p = (test::scratchDir("mesh") / name).string();
+  std::ofstream(p) << text;
+  return p;
+}
+
+// Two faces meeting at the edge (0,0,0)-(0,1,0): A in the plane z=0 (cross product
+// (0,0,1), area 1/2), B in the plane x=0 (cross product (-2,0,0), area 1). At the
+// shared vertices the area-weighted normal is (-2,0,1)/sqrt(5); an angle-weighted or
+// unweighted average would give (-1,0,1)/sqrt(2) (both corner angles are 90 degrees).
+// B's copies of the shared vertices have their own uvs: a uv seam.
+const char* kTent =
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 2\n"
+    "vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\nvt 0.5 0.9\nvt 0.9 0.5\n"
+    "f 1/1 2/2 3/3\nf 3/5 1/4 4/6\n";
+
+bool near(const vec3& a, const vec3& b, float eps = 1e-6f) { return glm::length(a - b) <= eps; }
+
+}  // namespace
+
+TEST_CASE("OBJ with uvs and normals: positions, uvs, triangles, normals normalised", "[mesh]") {
+  // A unit quad of two triangles; the file's normals have length 2.
+  const auto path = writeFile("quad.obj",
+                              "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                              "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 2\n"
+                              "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n");
+  const Mesh m = loadMesh(path, {glm::mat4(1.0f), true});
+  CHECK(m.name == path);
+  REQUIRE(m.positions.size() == 4);
+  REQUIRE(m.normals.size() == 4);
+  REQUIRE(m.uvs.size() == 4);
+  REQUIRE(m.triangles.size() == 2);
+  for (size_t v = 0; v < 4; ++v) {
+    INFO("vertex " << v);
+    CHECK(near(m.normals[v], vec3(0, 0, 1)));
+    CHECK(m.uvs[v] == vec2(m.positions[v].x, m.positions[v].y));  // uv = xy for this quad
+  }
+  // Both triangles keep their winding (normal +z) and cover the quad.
+  float area = 0;
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    const DisplacedTriangle t = m.triangle(i);
+    CHECK(near(t.faceNormal, vec3(0, 0, 1)));
+    CHECK(t.uvArea2 > 0);
+    area += t.area;
+    for (int k = 0; k < 3; ++k) {
+      CHECK(t.p[k] == m.positions[m.triangles[i][k]]);
+      CHECK(t.n[k] == m.normals[m.triangles[i][k]]);
+      CHECK(t.t[k] == m.uvs[m.triangles[i][k]]);
+    }
+  }
+  CHECK(area == Approx(1.0f));
+  CHECK(m.bytes() == 4 * sizeof(vec3) * 2 + 4 * sizeof(vec2) + 2 * sizeof(glm::uvec3));
+}
+
+TEST_CASE("ASCII PLY with uvs: quads are triangulated", "[mesh]") {
+  const auto path = writeFile("quad.ply",
+                              "ply\nformat ascii 1.0\nelement vertex 4\n"
+                              "property float x\nproperty float y\nproperty float z\n"
+                              "property float s\nproperty float t\n"
+                              "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                              "0 0 0 0 0\n2 0 0 1 0\n2 2 0 1 1\n0 2 0 0 1\n4 0 1 2 3\n");
+  const Mesh m = loadMesh(path, {glm::mat4(1.0f), true});
+  REQUIRE(m.triangles.size() == 2);
+  REQUIRE(m.positions.size() == 4);
+  REQUIRE(m.hasUVs());
+  for (size_t v = 0; v < 4; ++v) {
+    CHECK(m.uvs[v] == vec2(m.positions[v].x / 2, m.positions[v].y / 2));
+    CHECK(near(m.normals[v], vec3(0, 0, 1)));  // computed: the file has none
+  }
+}
+
+TEST_CASE("smooth normals are area-weighted, unit, and shared across uv seams", "[mesh]") {
+  const auto path = writeFile("tent.obj", kTent);
+  const Mesh m = loadMesh(path, {glm::mat4(1.0f), true});
+  REQUIRE(m.triangles.size() == 2);
+  // The shared positions are split by their uvs: 6 vertices, 4 positions.
+  REQUIRE(m.positions.size() == 6);
+  const vec3 shared = glm::normalize(vec3(-2, 0, 1));
+  std::map<std::tuple<float, float, float>, vec3> byPosition;
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    const vec3 p = m.positions[v], n = m.normals[v];
+    INFO("vertex " << v << " at " << p.x << " " << p.y << " " << p.z);
+    CHECK(glm::length(n) == Approx(1.0f).epsilon(1e-6));
+    if (p == vec3(1, 0, 0)) CHECK(near(n, vec3(0, 0, 1)));
+    else if (p == vec3(0, 0, 2)) CHECK(near(n, vec3(-1, 0, 0)));
+    else CHECK(near(n, shared));
+    // Seam copies get bit-identical normals (needed for watertight displacement).
+    auto [it, fresh] = byPosition.try_emplace({p.x, p.y, p.z}, n);
+    if (!fresh) CHECK(it->second == n);
+  }
+  CHECK(byPosition.size() == 4);
+
+  // computeSmoothNormals on its own gives the same.
+  Mesh copy = m;
+  computeSmoothNormals(copy);
+  CHECK(copy.normals == m.normals);
+}
+
+TEST_CASE("zero normals in the file are replaced by smooth normals", "[mesh]") {
+  const auto path = writeFile("zeronormal.obj",
+                              "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 0 0 3\n"
+                              "f 1//1 2//2 3//1\n");
+  const Mesh m = loadMesh(path);
+  REQUIRE(m.normals.size() == 3);
+  for (const vec3& n : m.normals) CHECK(near(n, vec3(0, 0, 1)));
+  CHECK_FALSE(m.hasUVs());
+  CHECK(m.triangle(0).t[1] == vec2(0.0f));  // no uvs: t = 0
+}
+
+TEST_CASE("several objects in one file are concatenated", "[mesh]") {
+  const auto path = writeFile("two.obj",
+                              "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+                              "o b\nv 5 0 0\nv 6 0 0\nv 5 1 0\nv 6 1 0\nf 4 5 6\nf 5 7 6\n");
+  const Mesh m = loadMesh(path);
+  REQUIRE(m.triangles.size() == 3);
+  REQUIRE(m.positions.size() == 7);
+  AABB box;
+  for (const auto& f : m.triangles)
+    for (int k = 0; k < 3; ++k) {
+      REQUIRE(f[k] < m.positions.size());
+      box.extend(m.positions[f[k]]);
+    }
+  CHECK(box.lo == vec3(0, 0, 0));
+  CHECK(box.hi == vec3(6, 1, 0));
+}
+
+TEST_CASE("transforms move positions and normals (inverse transpose)", "[mesh]") {
+  const auto path = writeFile("tent_t.obj", kTent);
+  const Mesh base = loadMesh(path);
+  // Non-uniform scale: the normal (-2,0,1) becomes (-1,0,1) under the inverse transpose.
+  const glm::mat4 T = glm::translate(glm::mat4(1.0f), vec3(1, 2, 3)) * glm::scale(glm::mat4(1.0f), vec3(2, 1, 1));
+  const Mesh m = loadMesh(path, {T, false});
+  REQUIRE(m.positions.size() == base.positions.size());
+  for (size_t v = 0; v < m.positions.size(); ++v) {
+    const vec3 p = base.positions[v];
+    CHECK(near(m.positions[v], vec3(2 * p.x + 1, p.y + 2, p.z + 3)));
+    if (near(base.normals[v], glm::normalize(vec3(-2, 0, 1))))
+      CHECK(near(m.normals[v], glm::normalize(vec3(-1, 0, 1))));
+    CHECK(glm::length(m.normals[v]) == Approx(1.0f));
+  }
+  // The area-weighted normal commutes with affine maps: recomputing gives the same.
+  Mesh again = m;
+  computeSmoothNormals(again);
+  for (size_t v = 0; v < m.normals.size(); ++v) CHECK(near(again.normals[v], m.normals[v], 1e-5f));
+
+  // A mirror keeps the winding consistent with the vertex normals.
+  Mesh mirrored = base;
+  transformMesh(mirrored, glm::scale(glm::mat4(1.0f), vec3(-1, 1, 1)));
+  for (size_t i = 0; i < mirrored.triangles.size(); ++i) {
+    const DisplacedTriangle t = mirrored.triangle(i);
+    for (int k = 0; k < 3; ++k) CHECK(glm::dot(t.faceNormal, t.n[k]) > 0.0f);
+  }
+  Mesh flat = base;
+  CHECK_THROWS_WITH(transformMesh(flat, glm::scale(glm::mat4(1.0f), vec3(1, 0, 1))), Contains("singular"));
+}
+
+TEST_CASE("bad meshes give one-line errors naming the file", "[mesh]") {
+  SECTION("missing file") {
+    const std::string path = (test::scratchDir("mesh") / "does_not_exist.obj").string();
+    CHECK_THROWS_MATCHES(loadMesh(path), Error, Catch::Matchers::Message(path + ": file not found"));
+  }
+  SECTION("garbage file") {
+    const auto path = writeFile("garbage.ply", "this is not a mesh\n\x01\x02\x03");
+    CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": cannot load mesh"));
+  }
+  SECTION("no triangles (lines only)") {
+    const auto path = writeFile("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n");
+    CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": ") && Contains("no triangles"));
+  }
+  SECTION("no uvs when displacement needs them") {
+    const auto path = writeFile("nouv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    CHECK_NOTHROW(loadMesh(path));
+    CHECK_THROWS_MATCHES(loadMesh(path, {glm::mat4(1.0f), true}), Error,
+                         Catch::Matchers::Message(path + ": mesh has no texture coordinates (needed for displacement)"));
+  }
+  SECTION("normals that cancel (two-sided sheet sharing vertices)") {
+    const auto path = writeFile("cancel.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 2\n");
+    CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": ") && Contains("zero normal"));
+  }
+  SECTION("non-finite positions") {
+    const auto path = writeFile("inf.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                "property float x\nproperty float y\nproperty float z\n"
+                                "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                "0 0 0\n1e39 0 0\n0 1 0\n3 0 1 2\n");
+    CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": ") && Contains("non-finite"));
+  }
+}
+
+TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map; high: the reference)", "[mesh]") {
+  const std::string low = "/usr/share/glmark2/models/asteroid-low.3ds";
+  const std::string high = "/usr/share/glmark2/models/asteroid-high.3ds";
+  // Installed by the set-up script (glmark2-data): its absence is a broken set-up.
+  REQUIRE(std::filesystem::exists(low));
+  REQUIRE(std::filesystem::exists(high));
+  const Mesh m = loadMesh(low, {glm::mat4(1.0f), true});
+  CHECK(m.triangles.size() == 480);
+  CHECK(m.positions.size() == 262);  // 242 distinct positions, 20 split at uv seams
+  REQUIRE(m.hasUVs());
+  AABB box;
+  for (const vec3& p : m.positions) box.extend(p);
+  CHECK(box.lo.x == Approx(-1.2756f).margin(1e-3));
+  CHECK(box.hi.x == Approx(1.1518f).margin(1e-3));
+  CHECK(box.lo.y == Approx(-0.8847f).margin(1e-3));
+  CHECK(box.hi.z == Approx(0.9475f).margin(1e-3));
+  for (const vec3& n : m.normals) CHECK(glm::length(n) == Approx(1.0f).epsilon(1e-5));
+  for (const vec2& t : m.uvs) CHECK((t.x >= 0 && t.x <= 1 && t.y >= 0 && t.y <= 1));
+  size_t displaceable = 0;
+  for (size_t i = 0; i < m.triangles.size(); ++i) displaceable += m.triangle(i).prepare();
+  CHECK(displaceable == m.triangles.size());
+
+  const Mesh h = loadMesh(high);
+  CHECK(h.triangles.size() == 48000);
+  CHECK(h.positions.size() == 24002);
+  CHECK_FALSE(h.hasUVs());
+}

@@ -1,0 +1,259 @@
+// RangeQuery strategies against an independent brute force (DESIGN invariants 2, 4).
+#include "strategies/minmax_mipmap.h"
+#include "strategies/range_query.h"
+#include "strategies/rmip.h"
+#include "strategies/safety_zones.h"
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include <random>
+
+using namespace oblong;
+using nlohmann::json;
+
+namespace {
+
+// Random texels quantised to 8 bits, so ties and plateaus occur.
+std::shared_ptr<HeightMap> randomMap(int W, int H, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> q(0, 255);
+  std::vector<float> t(size_t(W) * H);
+  for (float& v : t) v = float(q(rng)) / 255.0f * 2.0f - 1.0f;
+  return std::make_shared<HeightMap>(W, H, std::move(t), fmt::format("random{}x{}", W, H));
+}
+
+// Independent of the strategies: wrap by hand, at most one period per axis.
+Interval bruteRaw(const HeightMap& m, int64_t x0, int64_t x1, int64_t y0, int64_t y1) {
+  const int W = m.width(), H = m.height();
+  x1 = std::min(x1, x0 + W - 1);
+  y1 = std::min(y1, y0 + H - 1);
+  Interval r;
+  for (int64_t j = y0; j <= y1; ++j)
+    for (int64_t i = x0; i <= x1; ++i)
+      r.extend(m.texels()[size_t(((j % H) + H) % H) * W + size_t(((i % W) + W) % W)]);
+  return r;
+}
+
+// True micro-geometry height range over a closed uv rectangle: every grid cell
+// [i,i+1]x[j,j+1] (sample space) that touches the rectangle contributes its 4 corners.
+Interval truthHeights(const Displacement& d, const Rect& uv) {
+  const dvec2 a = d.toSample(uv.lo), b = d.toSample(uv.hi);
+  const int64_t i0 = int64_t(std::ceil(a.x)) - 1, i1 = int64_t(std::floor(b.x)) + 1;
+  const int64_t j0 = int64_t(std::ceil(a.y)) - 1, j1 = int64_t(std::floor(b.y)) + 1;
+  const int W = d.map->width(), H = d.map->height();
+  Interval r;
+  for (int64_t j = j0; j <= std::min(j1, j0 + H - 1); ++j)
+    for (int64_t i = i0; i <= std::min(i1, i0 + W - 1); ++i) r.extend(d.sampleHeight(int(i), int(j)));
+  return r;
+}
+
+// Rectangles of every kind the traversal can produce, in uv (before tiling).
+Rect randomRect(std::mt19937& rng, const Displacement& d, int kind) {
+  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+  const float tx = 1.0f / (d.map->width() * d.tiling.x), ty = 1.0f / (d.map->height() * d.tiling.y);
+  const float px = 1.0f / d.tiling.x, py = 1.0f / d.tiling.y;  // one map period in uv
+  float w = 0, h = 0;
+  vec2 lo(-2.0f + 4.0f * u01(rng), -2.0f + 4.0f * u01(rng));
+  switch (kind) {
+    case 0: w = 0.2f * tx * u01(rng), h = 0.2f * ty * u01(rng); break;          // tiny
+    case 1: w = tx * (0.5f + 1.5f * u01(rng)), h = ty * (0.5f + 1.5f * u01(rng)); break;  // texel
+    case 2: w = 0.5f * px * u01(rng), h = 0.5f * py * u01(rng); break;          // medium
+    case 3: w = px * (1.0f + 2.0f * u01(rng)), h = py * (1.0f + 2.0f * u01(rng)); break;  // huge
+    case 4: w = tx * u01(rng), h = 2.0f * py * u01(rng); break;                 // 1 x N
+    case 5: w = 2.0f * px * u01(rng), h = ty * u01(rng); break;                 // N x 1
+    case 6:  // straddles a period border on both axes
+      lo = vec2(std::round(lo.x / px) * px, std::round(lo.y / py) * py);
+      w = 0.3f * px * u01(rng), h = 0.3f * py * u01(rng);
+      lo -= vec2(w * u01(rng), h * u01(rng));
+      break;
+    default: break;
+  }
+  return {lo, lo + vec2(w, h)};
+}
+
+SampleRange randomRange(std::mt19937& rng, int W, int H) {
+  std::uniform_int_distribution<int> kind(0, 3);
+  auto axis = [&](int n, int& a0, int& a1) {
+    a0 = std::uniform_int_distribution<int>(-3 * n, 3 * n)(rng);
+    int e = 1;
+    switch (kind(rng)) {
+      case 0: e = 1; break;
+      case 1: e = std::uniform_int_distribution<int>(1, 3)(rng); break;
+      case 2: e = std::uniform_int_distribution<int>(1, n)(rng); break;
+      default: e = std::uniform_int_distribution<int>(1, 3 * n + 2)(rng); break;
+    }
+    a1 = a0 + e - 1;
+  };
+  SampleRange r;
+  axis(W, r.x0, r.x1);
+  axis(H, r.y0, r.y1);
+  return r;
+}
+
+struct Config {
+  std::string name;
+  json params;
+};
+
+std::vector<Config> configsFor(const HeightMap& m) {
+  std::vector<Config> c;
+  for (const auto& n : rangeQueryNames()) c.push_back({n, json::object()});
+  const int big = std::max(m.width(), m.height());
+  for (int res : {0, std::max(1, big / 2), std::max(1, big / 4)})
+    for (int comp : {0, 1, 99}) c.push_back({"rmip", {{"resolution", res}, {"compression", comp}}});
+  c.push_back({"safety_zones", {{"deltas", {0, 3, 5}}}});
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("every range query strategy is conservative, and exact where it claims to be", "[range_query]") {
+  const std::vector<std::pair<int, int>> sizes = {{1, 1}, {2, 2}, {3, 7}, {17, 5}, {64, 64}, {100, 37}, {256, 256}};
+  uint32_t seed = 1;
+  int checked = 0;
+  for (auto [W, H] : sizes) {
+    auto map = randomMap(W, H, seed++);
+    const bool large = W * H > 10000;
+    const int nRects = large ? 150 : 400, nRanges = large ? 150 : 400;
+    for (int dv = 0; dv < 2; ++dv) {
+      Displacement disp;
+      disp.map = map;
+      if (dv == 1) disp.scale = -0.7f, disp.bias = 0.3f, disp.tiling = vec2(3.0f, 2.0f);
+
+      // Inputs and truths once per displacement, shared by every configuration.
+      std::mt19937 rng(seed * 7919u + dv);
+      std::vector<Rect> rects;
+      std::vector<Interval> truths;
+      for (int k = 0; k < nRects; ++k) {
+        rects.push_back(randomRect(rng, disp, k % 7));
+        truths.push_back(truthHeights(disp, rects.back()));
+      }
+      std::vector<SampleRange> ranges;
+      std::vector<Interval> rawTruths;
+      for (int k = 0; k < nRanges; ++k) {
+        ranges.push_back(randomRange(rng, W, H));
+        const SampleRange& r = ranges.back();
+        rawTruths.push_back(bruteRaw(*map, r.x0, r.x1, r.y0, r.y1));
+        const Interval bf = bruteForceRange(*map, r);
+        if (!(bf == rawTruths.back())) {
+          CAPTURE(W, H, r.x0, r.x1, r.y0, r.y1, bf.lo, bf.hi, rawTruths.back().lo, rawTruths.back().hi);
+          FAIL("bruteForceRange disagrees with the test's own brute force");
+        }
+      }
+
+      const QueryNeeds needsList[3] = {QueryNeeds::all(*map), {4, 3, false}, {W / 2 + 1, 2, true}};
+      for (const Config& cfg : configsFor(*map))
+        for (int ni = 0; ni < 3; ++ni) {
+          if (dv == 1 && ni > 0) continue;  // needs variants on the plain displacement only
+          const QueryNeeds& needs = needsList[ni];
+          ParamSet ps(cfg.params, "test");
+          auto rq = createRangeQuery(cfg.name, ps, {disp, needs});
+          const std::string what = fmt::format("{} {} on {}x{}, needs ({},{},wrap {}), scale {} bias {} tiling ({},{})",
+                                               cfg.name, cfg.params.dump(), W, H, needs.maxExtentX,
+                                               needs.maxExtentY, needs.wrap, disp.scale, disp.bias,
+                                               disp.tiling.x, disp.tiling.y);
+          for (size_t k = 0; k < rects.size(); ++k) {
+            const Interval q = rq->queryVirtual(rects[k], 0.0f);
+            if (!q.contains(truths[k]) || q.isEmpty()) {
+              const SampleRange s = rq->snap(rects[k]);
+              CAPTURE(what, k, rects[k].lo.x, rects[k].lo.y, rects[k].hi.x, rects[k].hi.y, s.x0, s.x1, s.y0,
+                      s.y1, q.lo, q.hi, truths[k].lo, truths[k].hi);
+              FAIL("query does not contain the micro-geometry's height range");
+            }
+            if (rq->exact()) {
+              const Interval e = disp.toHeight(bruteForceRange(*map, rq->snap(rects[k])));
+              if (!(q == e)) {
+                CAPTURE(what, k, rects[k].lo.x, rects[k].lo.y, rects[k].hi.x, rects[k].hi.y, q.lo, q.hi, e.lo, e.hi);
+                FAIL("exact strategy differs from brute force over the snapped range");
+              }
+            }
+          }
+          for (size_t k = 0; k < ranges.size(); ++k) {
+            const SampleRange& r = ranges[k];
+            const Interval q = rq->rawRangeVirtual(r);
+            const bool ok = rq->exact() ? q == rawTruths[k] : q.contains(rawTruths[k]);
+            if (!ok || q.isEmpty()) {
+              CAPTURE(what, rq->exact(), r.x0, r.x1, r.y0, r.y1, q.lo, q.hi, rawTruths[k].lo, rawTruths[k].hi);
+              FAIL("rawRange is not conservative (or not exact where exact() is claimed)");
+            }
+          }
+          checked += int(rects.size() + ranges.size());
+        }
+    }
+  }
+  // Full resolution and uncompressed must claim exactness (the claim is then tested above).
+  auto map = randomMap(64, 64, 99);
+  Displacement disp;
+  disp.map = map;
+  ParamSet ps(json{{"compression", 99}}, "test");
+  CHECK(createRangeQuery("rmip", ps, {disp, QueryNeeds::all(*map)})->exact());
+  ParamSet ps2(json{{"resolution", 32}, {"compression", 99}}, "test");
+  CHECK_FALSE(createRangeQuery("rmip", ps2, {disp, QueryNeeds::all(*map)})->exact());
+  CHECK(checked > 0);
+}
+
+TEST_CASE("range query names and parameters are validated", "[range_query]") {
+  auto map = randomMap(16, 16, 5);
+  Displacement disp;
+  disp.map = map;
+  const RangeQueryContext ctx{disp, QueryNeeds::all(*map)};
+  auto make = [&](const std::string& name, json params) {
+    ParamSet ps(std::move(params), "scene.json: range");
+    return createRangeQuery(name, ps, ctx);
+  };
+  const auto names = rangeQueryNames();
+  for (const char* n : {"rmip", "minmax_mipmap", "safety_zones"})
+    CHECK(std::find(names.begin(), names.end(), n) != names.end());
+  CHECK_THROWS_WITH(make("no_such_strategy", json::object()), Catch::Contains("no_such_strategy"));
+  CHECK_THROWS_AS(make("no_such_strategy", json::object()), Error);
+  CHECK_THROWS_WITH(make("rmip", {{"bogus", 1}}), Catch::Contains("bogus"));
+  CHECK_THROWS_WITH(make("minmax_mipmap", {{"bogus", 1}}), Catch::Contains("bogus"));
+  CHECK_THROWS_AS(make("rmip", {{"resolution", -1}}), Error);
+  CHECK_THROWS_AS(make("rmip", {{"compression", -1}}), Error);
+  CHECK_THROWS_AS(make("rmip", {{"resolution", "high"}}), Error);
+  CHECK_THROWS_AS(make("safety_zones", {{"deltas", {1, -2}}}), Error);
+  CHECK_THROWS_AS(make("safety_zones", {{"deltas", json::array()}}), Error);
+  CHECK_NOTHROW(make("rmip", {{"resolution", 8}, {"compression", 2}}));
+  // Only lod 0 is defined.
+  auto rq = make("rmip", json::object());
+  CHECK_THROWS_AS(rq->queryVirtual(Rect{vec2(0.1f), vec2(0.2f)}, 1.5f), Error);
+  CHECK_NOTHROW(rq->queryVirtual(Rect{vec2(0.1f), vec2(0.2f)}, 0.0f));
+}
+
+TEST_CASE("range queries build only what the scene needs (invariant 4)", "[range_query][rmip]") {
+  auto map = randomMap(256, 200, 11);
+  Displacement disp;
+  disp.map = map;
+  auto bytesOf = [&](const std::string& name, json params, QueryNeeds needs) {
+    ParamSet ps(std::move(params), "test");
+    auto rq = createRangeQuery(name, ps, {disp, needs});
+    CAPTURE(name, params.dump());
+    CHECK(totalBytes(rq->memory()) == rq->bytes());
+    for (const auto& item : rq->memory()) CHECK(item.name.rfind(name + "/", 0) == 0);
+    return rq->bytes();
+  };
+  const QueryNeeds all = QueryNeeds::all(*map), small{8, 8, true}, noWrap{257, 201, false};
+  for (const char* n : {"rmip", "minmax_mipmap", "safety_zones"}) {
+    CAPTURE(n);
+    CHECK(bytesOf(n, json::object(), small) < bytesOf(n, json::object(), all));
+  }
+  for (int c : {0, 1, 99}) {
+    CAPTURE(c);
+    CHECK(bytesOf("rmip", {{"compression", c}}, small) < bytesOf("rmip", {{"compression", c}}, all));
+    CHECK(bytesOf("rmip", {{"compression", c}}, noWrap) < bytesOf("rmip", {{"compression", c}}, all));
+  }
+  // Compression and resolution shrink the structure.
+  CHECK(bytesOf("rmip", {{"compression", 1}}, all) < bytesOf("rmip", {{"compression", 99}}, all));
+  CHECK(bytesOf("rmip", {{"resolution", 64}}, all) < bytesOf("rmip", json::object(), all));
+
+  // QueryNeeds::forRects: extents of the snapped boxes, wrap only when one leaves the map.
+  const QueryNeeds inside = QueryNeeds::forRects(disp, {Rect{vec2(0.1f), vec2(0.2f, 0.15f)}});
+  CHECK_FALSE(inside.wrap);
+  CHECK(inside.maxExtentX >= 0.1 * 256 + 1);
+  CHECK(inside.maxExtentX <= 0.1 * 256 + 3);
+  CHECK(inside.maxExtentY >= 0.05 * 200 + 1);
+  CHECK(inside.maxExtentY <= 0.05 * 200 + 3);
+  CHECK(QueryNeeds::forRects(disp, {Rect{vec2(0.9f, 0.5f), vec2(1.1f, 0.6f)}}).wrap);
+  CHECK(QueryNeeds::forRects(disp, {Rect{vec2(0.0f, 0.5f), vec2(0.1f, 0.6f)}}).wrap);  // cell left of texel 0
+}

@@ -1,0 +1,263 @@
+#include "core/error.h"
+#include "core/scene.h"
+#include "test_util.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+using namespace oblong;
+using Catch::Matchers::Contains;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A scratch folder with a quad with uvs, one without, and a 4x2 8-bit height map.
+fs::path sceneDir() {
+  const fs::path dir = test::scratchDir("scene");
+  fs::create_directories(dir / "sub");
+  std::ofstream(dir / "quad.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                     "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+  std::ofstream(dir / "nouv.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  test::writeGray((dir / "map.png").string(), 4, 2, {0, 0.2f, 0.4f, 0.6f, 0.8f, 1, 1, 1}, OIIO::TypeDesc::UINT8);
+  return dir;
+}
+
+std::string writeScene(const fs::path& file, const std::string& text) {
+  std::ofstream(file) << text;
+  return file.string();
+}
+
+const char* kValid = R"({
+  // comments are allowed
+  "image": {"width": 320, "height": 200},
+  "camera": {"from": [0, 1, 4], "to": [0, 0, 0], "up": [0, 1, 0], "fov": 35},
+  "lights": [{"type": "directional", "direction": [0, -2, 0], "intensity": 2.5},
+             {"type": "point", "position": [1, 2, 3], "intensity": [1, 0.5, 0.25]}],
+  "meshes": [
+    {"file": "../quad.obj", "albedo": [0.1, 0.2, 0.3],
+     "transform": {"scale": 2, "rotate": [90, 0, 0, 1], "translate": [10, 0, 0]},
+     "displacement": {"map": "../map.png", "scale": 0.5, "bias": -0.25, "tiling": [2, 3], "flip_v": true}},
+    {"file": "../quad.obj", "transform": {"matrix": [2, 0, 0, 1,  0, 1, 0, 0,  0, 0, 1, 0,  0, 0, 0, 1]},
+     "displacement": {"map": "../sub/../map.png", "flip_v": true, "tiling": 4}},
+    {"file": "../quad.obj", "displacement": {"map": "../map.png"}},
+    {"file": "../nouv.obj"}
+  ],
+  "strategies": {"range": {"name": "rmip", "resolution": 64, "lod": false}}
+})";
+
+bool near(const vec3& a, const vec3& b) { return glm::length(a - b) < 1e-5f; }
+
+}  // namespace
+
+TEST_CASE("a valid scene round trip", "[scene]") {
+  const fs::path dir = sceneDir();
+  // The scene lives in sub/: every relative path is resolved against sub/, not the cwd.
+  const std::string path = writeScene(dir / "sub" / "valid.json", kValid);
+  const Scene s = loadScene(path);
+  CHECK(s.path == path);
+  CHECK(s.imageSize == ivec2(320, 200));
+  CHECK(s.camera.from == vec3(0, 1, 4));
+  CHECK(s.camera.fovY == 35.0f);
+
+  REQUIRE(s.lights.size() == 2);
+  CHECK(s.lights[0].type == Light::Type::Directional);
+  CHECK(s.lights[0].direction == vec3(0, -1, 0));  // normalised
+  CHECK(s.lights[0].intensity == vec3(2.5f));
+  CHECK(s.lights[1].type == Light::Type::Point);
+  CHECK(s.lights[1].position == vec3(1, 2, 3));
+  CHECK(s.lights[1].intensity == vec3(1, 0.5f, 0.25f));
+
+  REQUIRE(s.meshes.size() == 4);
+  const SceneMesh& a = s.meshes[0];
+  CHECK(a.mesh.name == (dir / "quad.obj").lexically_normal().string());
+  CHECK(a.albedo == vec3(0.1f, 0.2f, 0.3f));
+  REQUIRE(a.displacement);
+  CHECK(a.displacement->scale == 0.5f);
+  CHECK(a.displacement->bias == -0.25f);
+  CHECK(a.displacement->tiling == vec2(2, 3));
+  REQUIRE(a.displacement->map);
+  CHECK(a.displacement->map->width() == 4);
+  CHECK(a.displacement->map->height() == 2);
+  CHECK(a.displacement->map->atUnchecked(0, 0) == Approx(0.8f).margin(0.5 / 255));  // flipped: last row first
+  // Scale 2, then 90 degrees about z, then translate: (1,0,0) -> (2,0,0) -> (0,2,0) -> (10,2,0).
+  for (size_t v = 0; v < a.mesh.positions.size(); ++v) {
+    const vec3 p = s.meshes[2].mesh.positions[v];  // untransformed copy
+    CHECK(near(a.mesh.positions[v], vec3(10 - 2 * p.y, 2 * p.x, 2 * p.z)));
+    CHECK(near(a.mesh.normals[v], vec3(0, 0, 1)));
+  }
+  // Row-major matrix: x' = 2x + 1.
+  const SceneMesh& b = s.meshes[1];
+  for (size_t v = 0; v < b.mesh.positions.size(); ++v) {
+    const vec3 p = s.meshes[2].mesh.positions[v];
+    CHECK(near(b.mesh.positions[v], vec3(2 * p.x + 1, p.y, p.z)));
+  }
+  CHECK(b.displacement->tiling == vec2(4, 4));
+  CHECK(b.albedo == vec3(0.7f));  // default
+
+  // Defaults of the third mesh's displacement.
+  const Displacement& c = *s.meshes[2].displacement;
+  CHECK(c.scale == 1.0f);
+  CHECK(c.bias == 0.0f);
+  CHECK(c.tiling == vec2(1, 1));
+  CHECK(c.map->atUnchecked(0, 0) == 0.0f);  // not flipped
+
+  CHECK_FALSE(s.meshes[3].displacement);
+  CHECK_FALSE(s.meshes[3].mesh.hasUVs());  // fine: it is not displaced
+
+  CHECK(s.range.name == "rmip");
+  CHECK(s.range.params == nlohmann::json({{"resolution", 64}, {"lod", false}}));
+  CHECK(s.range.where == path + ": strategies.range");
+}
+
+TEST_CASE("a map used by several meshes is loaded once", "[scene]") {
+  const fs::path dir = sceneDir();
+  const Scene s = loadScene(writeScene(dir / "sub" / "shared.json", kValid));
+  // "../map.png" and "../sub/../map.png" with flip_v: one map; without flip_v: another.
+  CHECK(s.meshes[0].displacement->map == s.meshes[1].displacement->map);
+  CHECK(s.meshes[0].displacement->map != s.meshes[2].displacement->map);
+  CHECK(s.meshes[0].displacement->map.use_count() == 2);  // the two meshes; no cache keeps it
+}
+
+TEST_CASE("defaults: a scene with only a mesh", "[scene]") {
+  const fs::path dir = sceneDir();
+  const std::string path = writeScene(dir / "minimal.json", R"({"meshes": [{"file": "quad.obj"}]})");
+  const Scene s = loadScene(path);
+  CHECK(s.imageSize == ivec2(640, 480));
+  CHECK(s.camera.fovY == 40.0f);
+  CHECK(s.lights.empty());
+  CHECK(s.range.name == "rmip");
+  CHECK(s.range.params.empty());
+  REQUIRE(s.meshes.size() == 1);
+  CHECK_FALSE(s.meshes[0].displacement);
+}
+
+TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
+  const fs::path dir = sceneDir();
+  const std::string mesh = R"("meshes": [{"file": "quad.obj"}])";
+  const std::string disp = R"({"meshes": [{"file": "quad.obj", "displacement": {"map": "map.png", )";
+  struct Case {
+    const char* name;
+    std::string text;
+    std::vector<std::string> expect;  // substrings of the message besides the file name
+  } cases[] = {
+      {"malformed JSON", R"({"meshes": [})", {"malformed JSON", "parse error"}},
+      {"top level not an object", "[1, 2]", {"must be an object"}},
+      {"unknown top-level key", "{" + mesh + R"(, "meshs": []})", {"unknown key 'meshs'"}},
+      {"unknown mesh key", R"({"meshes": [{"file": "quad.obj", "displacment": {}}]})",
+       {"unknown key 'meshes[0].displacment'"}},
+      {"unknown key in a later mesh is found first",
+       R"({"meshes": [{"file": "missing.obj"}, {"file": "quad.obj", "albedoo": [1,1,1]}]})",
+       {"unknown key 'meshes[1].albedoo'"}},
+      {"unknown displacement key", disp + R"("scael": 2}}]})", {"unknown key 'meshes[0].displacement.scael'"}},
+      {"unknown transform key", R"({"meshes": [{"file": "quad.obj", "transform": {"rotation": [1,0,0,1]}}]})",
+       {"unknown key 'meshes[0].transform.rotation'"}},
+      {"unknown camera key", "{" + mesh + R"(, "camera": {"fovy": 30}})", {"unknown key 'camera.fovy'"}},
+      {"point-light key on a directional light",
+       "{" + mesh + R"(, "lights": [{"type": "directional", "direction": [0,-1,0], "position": [0,0,0]}]})",
+       {"unknown key 'lights[0].position'"}},
+      {"unknown strategy slot", "{" + mesh + R"(, "strategies": {"inverter": {"name": "newton"}}})",
+       {"unknown key 'strategies.inverter'"}},
+      {"zero image width", "{" + mesh + R"(, "image": {"width": 0}})", {"image.width", "positive integer"}},
+      {"negative image height", "{" + mesh + R"(, "image": {"height": -4}})", {"image.height", "positive integer"}},
+      {"fractional image width", "{" + mesh + R"(, "image": {"width": 64.5}})", {"image.width"}},
+      {"image width as a string", "{" + mesh + R"(, "image": {"width": "64"}})", {"image.width"}},
+      {"image not an object", "{" + mesh + R"(, "image": 64})", {"image: must be an object"}},
+      {"fov out of range", "{" + mesh + R"(, "camera": {"fov": 180}})", {"camera.fov", "(0, 180)"}},
+      {"fov wrong type", "{" + mesh + R"(, "camera": {"fov": "wide"}})", {"camera.fov", "must be a number"}},
+      {"number beyond double", "{" + mesh + R"(, "camera": {"fov": 1e400}})", {"malformed JSON", "1e400"}},
+      {"number beyond float", "{" + mesh + R"(, "camera": {"from": [1e39, 0, 0]}})", {"camera.from[0]", "finite"}},
+      {"camera from == to", "{" + mesh + R"(, "camera": {"from": [1,1,1], "to": [1,1,1]}})",
+       {"camera", "no view direction"}},
+      {"up parallel to view", "{" + mesh + R"(, "camera": {"from": [0,5,0], "to": [0,0,0]}})",
+       {"camera.up", "parallel"}},
+      {"vector of wrong length", "{" + mesh + R"(, "camera": {"from": [0,5]}})", {"camera.from", "3 numbers"}},
+      {"vector with a string", "{" + mesh + R"(, "camera": {"to": [0,"a",0]}})", {"camera.to[1]", "number"}},
+      {"lights not an array", "{" + mesh + R"(, "lights": {"type": "point"}})", {"lights", "must be an array"}},
+      {"unknown light type", "{" + mesh + R"(, "lights": [{"type": "spot"}]})", {"lights[0].type", "spot"}},
+      {"light without type", "{" + mesh + R"(, "lights": [{"direction": [0,-1,0]}]})",
+       {"lights[0].type", "missing"}},
+      {"zero light direction", "{" + mesh + R"(, "lights": [{"type": "directional", "direction": [0,0,0]}]})",
+       {"lights[0].direction", "zero"}},
+      {"negative intensity", "{" + mesh + R"(, "lights": [{"type": "point", "position": [0,0,0], "intensity": -1}]})",
+       {"lights[0].intensity", "negative"}},
+      {"point light without position", "{" + mesh + R"(, "lights": [{"type": "point"}]})",
+       {"lights[0].position", "missing"}},
+      {"no meshes", R"({"camera": {}})", {"meshes", "missing"}},
+      {"empty meshes", R"({"meshes": []})", {"meshes", "empty"}},
+      {"mesh without file", R"({"meshes": [{"albedo": [1,1,1]}]})", {"meshes[0].file", "missing"}},
+      {"mesh file not a string", R"({"meshes": [{"file": 3}]})", {"meshes[0].file", "string"}},
+      {"mesh file missing", R"({"meshes": [{"file": "nope.obj"}]})",
+       {"meshes[0].file", (dir / "nope.obj").string() + ": file not found"}},
+      {"albedo out of range", R"({"meshes": [{"file": "quad.obj", "albedo": [2,0,0]}]})", {"meshes[0].albedo"}},
+      {"displacement without map", R"({"meshes": [{"file": "quad.obj", "displacement": {"scale": 1}}]})",
+       {"meshes[0].displacement.map", "missing"}},
+      {"map file missing", R"({"meshes": [{"file": "quad.obj", "displacement": {"map": "nope.png"}}]})",
+       {"meshes[0].displacement.map", (dir / "nope.png").string()}},
+      {"zero tiling", disp + R"("tiling": 0}}]})", {"meshes[0].displacement.tiling", "positive"}},
+      {"zero tiling in v", disp + R"("tiling": [1, 0]}}]})", {"meshes[0].displacement.tiling"}},
+      {"zero displacement scale", disp + R"("scale": 0}}]})", {"meshes[0].displacement.scale"}},
+      {"flip_v not a bool", disp + R"("flip_v": "yes"}}]})", {"meshes[0].displacement.flip_v"}},
+      {"displaced mesh without uvs", R"({"meshes": [{"file": "nouv.obj", "displacement": {"map": "map.png"}}]})",
+       {"meshes[0].file", "no texture coordinates"}},
+      {"matrix of 15 numbers", R"({"meshes": [{"file": "quad.obj", "transform": {"matrix": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0]}}]})",
+       {"meshes[0].transform.matrix", "16 numbers"}},
+      {"projective matrix", R"({"meshes": [{"file": "quad.obj", "transform": {"matrix": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,1,1]}}]})",
+       {"meshes[0].transform.matrix", "affine"}},
+      {"singular matrix", R"({"meshes": [{"file": "quad.obj", "transform": {"matrix": [1,0,0,0,0,0,0,0,0,0,1,0,0,0,0,1]}}]})",
+       {"meshes[0].transform.matrix", "singular"}},
+      {"matrix with translate", R"({"meshes": [{"file": "quad.obj", "transform": {"matrix": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1], "translate": [1,0,0]}}]})",
+       {"meshes[0].transform.matrix", "combined"}},
+      {"zero scale", R"({"meshes": [{"file": "quad.obj", "transform": {"scale": [1,0,1]}}]})",
+       {"meshes[0].transform.scale", "zero"}},
+      {"zero rotation axis", R"({"meshes": [{"file": "quad.obj", "transform": {"rotate": [30,0,0,0]}}]})",
+       {"meshes[0].transform.rotate", "axis"}},
+      {"strategy without name", "{" + mesh + R"(, "strategies": {"range": {"resolution": 4}}})",
+       {"strategies.range.name", "missing"}},
+      {"strategy with empty name", "{" + mesh + R"(, "strategies": {"range": {"name": ""}}})",
+       {"strategies.range.name", "non-empty string"}},
+      {"strategy name not a string", "{" + mesh + R"(, "strategies": {"range": {"name": 3}}})",
+       {"strategies.range.name"}},
+  };
+  for (const Case& c : cases) {
+    DYNAMIC_SECTION(c.name) {
+      const std::string path = writeScene(dir / "bad.json", c.text);
+      INFO(c.text);
+      try {
+        loadScene(path);
+        FAIL("no error");
+      } catch (const Error& e) {
+        const std::string msg = e.what();
+        INFO(msg);
+        CHECK(msg.rfind(path + ": ", 0) == 0);  // starts with the scene file
+        CHECK(msg.find('\n') == std::string::npos);  // one line
+        for (const auto& s : c.expect) CHECK_THAT(msg, Contains(s));
+      }
+    }
+  }
+}
+
+TEST_CASE("missing scene file and non-finite numbers built in code", "[scene]") {
+  const fs::path dir = sceneDir();
+  const std::string missing = (dir / "nope.json").string();
+  CHECK_THROWS_MATCHES(loadScene(missing), Error, Catch::Matchers::Message(missing + ": file not found"));
+
+  nlohmann::json j = nlohmann::json::parse(R"({"meshes": [{"file": "quad.obj"}], "camera": {"fov": 30}})");
+  j["camera"]["fov"] = std::nan("");
+  const std::string where = (dir / "code.json").string();
+  CHECK_THROWS_WITH(parseScene(j, where), Contains(where + ": camera.fov: must be a finite number"));
+  j["camera"]["fov"] = 30;
+  j["camera"]["from"] = {0.0, INFINITY, 1.0};
+  CHECK_THROWS_WITH(parseScene(j, where), Contains(where + ": camera.from[1]"));
+}
+
+TEST_CASE("the scenes shipped in scenes/ parse", "[scene]") {
+  for (const char* name : {"asteroid.json", "asteroid_high.json"}) {
+    INFO(name);
+    const Scene s = loadScene(std::string(OBLONG_SOURCE_DIR) + "/scenes/" + name);
+    CHECK(s.meshes.size() == 1);
+    CHECK(s.lights.size() == 1);
+  }
+}
