@@ -4,7 +4,13 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
 
 namespace oblong {
 
@@ -18,10 +24,70 @@ HeightMap::HeightMap(int width, int height, std::vector<float> texels, std::stri
       fail(name_, "non-finite height at texel ({}, {})", k % size_t(w_), k / size_t(w_));
 }
 
+namespace {
+// OpenImageIO's messages may span several lines; errors are one line.
+std::string oneLine(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+// Some image libraries print to stderr themselves (OpenImageIO 2.4 leaves libpng's
+// default handlers in place: "libpng error: IDAT: Read error: hit end of file" before
+// our own error line). While a map is read, file descriptor 2 goes to a temporary file;
+// what was written there is returned by release(). Loads are serialised by a mutex,
+// since the descriptor is process-wide; scene loading prints nothing else meanwhile.
+class StderrCapture {
+ public:
+  StderrCapture() : lock_(mutex()) {
+    std::fflush(stderr);
+    tmp_ = std::tmpfile();
+    if (tmp_) saved_ = ::dup(2);
+    if (saved_ >= 0 && ::dup2(::fileno(tmp_), 2) < 0) {
+      ::close(saved_);
+      saved_ = -1;
+    }
+  }
+  ~StderrCapture() { release(); }
+  std::string release() {
+    std::string text;
+    if (saved_ >= 0) {
+      std::fflush(stderr);
+      ::dup2(saved_, 2);
+      ::close(saved_);
+      saved_ = -1;
+      std::rewind(tmp_);
+      char buf[512];
+      size_t n;
+      while ((n = std::fread(buf, 1, sizeof buf, tmp_)) > 0 && text.size() < 4096) text.append(buf, n);
+    }
+    if (tmp_) std::fclose(tmp_), tmp_ = nullptr;
+    return text;
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> lock_;
+  std::FILE* tmp_ = nullptr;
+  int saved_ = -1;
+};
+}  // namespace
+
 HeightMap HeightMap::load(const std::string& path, bool flipV) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  // Checked first: OpenImageIO would block on a FIFO or read a device forever.
+  if (!fs::exists(path, ec)) fail(path, "file not found");
+  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+  StderrCapture capture;
   auto in = OIIO::ImageInput::open(path);
   if (!in) {
-    std::string err = OIIO::geterror();
+    std::string err = oneLine(OIIO::geterror());
+    if (err.empty()) err = oneLine(capture.release());
     if (err.empty()) err = "cannot open image";
     // OIIO prefixes its messages with the file name already in some versions.
     fail(path, "cannot read displacement map ({})", err);
@@ -30,10 +96,20 @@ HeightMap HeightMap::load(const std::string& path, bool flipV) {
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
     fail(path, "image has no pixels");
   if (spec.depth > 1) fail(path, "3D (volume) images are not displacement maps");
+  // A corrupt header must not turn into a huge allocation (std::bad_alloc is no message).
+  if (spec.width > kMaxSide || spec.height > kMaxSide || int64_t(spec.width) * spec.height > kMaxTexels)
+    fail(path, "image is {}x{}: larger than the supported {}x{} or {} texels", spec.width, spec.height, kMaxSide,
+         kMaxSide, kMaxTexels);
   std::vector<float> texels(size_t(spec.width) * size_t(spec.height));
-  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, texels.data()))
-    fail(path, "cannot read pixels ({})", in->geterror());
+  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, texels.data())) {
+    std::string err = oneLine(in->geterror());
+    if (err.empty()) err = oneLine(capture.release());
+    fail(path, "cannot read pixels ({})", err.empty() ? "unknown error" : err);
+  }
   in->close();
+  // A library's own complaint about a file that did load: one warning line.
+  if (const std::string said = oneLine(capture.release()); !said.empty())
+    fmt::print(stderr, "oblong: warning: {}: {}\n", path, said);
   if (flipV) {
     for (int j = 0; j < spec.height / 2; ++j)
       std::swap_ranges(texels.begin() + size_t(j) * spec.width,

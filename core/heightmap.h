@@ -9,6 +9,7 @@
 #include "core/math.h"
 #include "core/memory.h"
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,8 +22,12 @@ class HeightMap {
   HeightMap(int width, int height, std::vector<float> texels, std::string name = "<memory>");
 
   // Reads the first channel of any image OpenImageIO can read (8/16-bit integer as
-  // [0,1], signed 16-bit as [-1,1], float as is). Errors name the file.
+  // [0,1], signed 16-bit as [-1,1], float as is). Errors name the file: missing, not a
+  // regular file, unreadable, larger than kMaxSide per side or kMaxTexels in all,
+  // any non-finite texel.
   static HeightMap load(const std::string& path, bool flipV = false);
+  static constexpr int kMaxSide = 1 << 16;
+  static constexpr int64_t kMaxTexels = int64_t(1) << 28;  // 1 GiB of float texels
 
   int width() const { return w_; }
   int height() const { return h_; }

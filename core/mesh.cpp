@@ -5,12 +5,31 @@
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <fmt/format.h>
 #include <glm/gtc/matrix_inverse.hpp>
 
+#include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <stdexcept>
 #include <unordered_map>
+
+// Debian's libassimp 5.2.4 is built with its internal checks (ai_assert) on, and the
+// default handler aborts the process: a malformed PLY face list, for one, ends in
+// "ai_assert failure in TriangulateProcess.cpp(238)" and SIGABRT (found by
+// tests/fuzz/fuzz_files.cpp; docs/bad_input.md). The library calls this function
+// through its PLT, so the definition here takes its place; the exception it throws is
+// caught by Importer::ReadFile (its catch-all exception region), which then returns no
+// scene and an error string, and loadMesh reports one line. (The library's own
+// setAiAssertHandler is not exported.)
+namespace Assimp {
+void aiAssertViolation(const char* failedExpression, const char* file, int line) {
+  throw std::runtime_error(fmt::format("assimp internal check failed: {} ({}:{})", failedExpression, file, line));
+}
+}  // namespace Assimp
 
 namespace oblong {
 
@@ -105,6 +124,40 @@ void fixNormals(Mesh& m) {
   }
 }
 
+// assimp 5.2.4 (Debian bookworm) loops forever on a PLY file whose header has no
+// `end_header` line (found by tests/fuzz/fuzz_files.cpp; docs/bad_input.md). assimp
+// reads a file as PLY when its extension is .ply, or when the extension is not one of
+// its own and the file starts with "ply": in both cases the header must have a line
+// whose first word is end_header (assimp hangs on "end_headerX" or "comment
+// end_header" too) within the first MiB.
+void checkPlyHeader(const std::string& path, const Assimp::Importer& importer) {
+  namespace fs = std::filesystem;
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::ifstream in(path, std::ios::binary);
+  std::string head(1 << 20, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(std::max<std::streamsize>(0, in.gcount())));
+  // assimp skips leading line breaks before the magic ("\nply" hangs too); be stricter.
+  const size_t start = std::min(head.size(), head.find_first_not_of(" \t\r\n\v\f"));
+  const bool plyMagic = head.compare(start, 3, "ply") == 0 || head.compare(start, 3, "PLY") == 0;
+  const bool asPly = ext == ".ply" || (plyMagic && (ext.empty() || !importer.IsExtensionSupported(ext)));
+  if (!asPly || !plyMagic) return;  // without the magic, assimp's PLY reader stops at once
+  size_t line = 0;
+  while (line < head.size()) {
+    size_t k = line;
+    while (k < head.size() && (head[k] == ' ' || head[k] == '\t')) ++k;
+    if (head.compare(k, 10, "end_header") == 0 &&
+        (k + 10 == head.size() || head[k + 10] == ' ' || head[k + 10] == '\t' || head[k + 10] == '\r' ||
+         head[k + 10] == '\n'))
+      return;
+    const size_t next = head.find_first_of("\r\n", line);
+    if (next == std::string::npos) break;
+    line = next + 1;
+  }
+  fail(path, "cannot load mesh (PLY header without an end_header line in its first MiB)");
+}
+
 }  // namespace
 
 void computeSmoothNormals(Mesh& m) {
@@ -130,6 +183,64 @@ void transformMesh(Mesh& m, const glm::mat4& transform) {
     for (glm::uvec3& f : m.triangles) std::swap(f[1], f[2]);
 }
 
+void finishMesh(Mesh& m, const MeshLoadOptions& opts) {
+  if (m.triangles.empty()) fail(m.name, "mesh has no triangles");
+  if (m.normals.size() != m.positions.size() || (!m.uvs.empty() && m.uvs.size() != m.positions.size()))
+    fail(m.name, "mesh has {} positions but {} normals and {} uvs", m.positions.size(), m.normals.size(),
+         m.uvs.size());
+  if (opts.needUVs && m.uvs.empty()) fail(m.name, "mesh has no texture coordinates (needed for displacement)");
+  for (const glm::uvec3& f : m.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (f[k] >= m.positions.size()) fail(m.name, "triangle uses vertex {} of {}", f[k], m.positions.size());
+
+  // Degenerate before the transform, with the same exact (double) test as the smooth
+  // normals, so that a vertex used only by such triangles never needs a normal.
+  enum : uint8_t { kOk = 0, kZeroArea, kZeroUVArea };
+  std::vector<uint8_t> why(m.triangles.size(), kOk);
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    const glm::uvec3& f = m.triangles[i];
+    const dvec3 p0(m.positions[f[0]]), p1(m.positions[f[1]]), p2(m.positions[f[2]]);
+    if (glm::cross(p1 - p0, p2 - p0) == dvec3(0.0)) why[i] = kZeroArea;
+  }
+  fixNormals(m);
+  if (opts.transform != glm::mat4(1.0f)) transformMesh(m, opts.transform);
+
+  // After the transform, with the float quantities the renderer uses (DisplacedTriangle).
+  size_t zeroArea = 0, zeroUV = 0, first = m.triangles.size();
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    if (why[i] == kOk) {
+      const DisplacedTriangle T = m.triangle(i);  // prepare()d
+      if (!std::isfinite(T.area))
+        fail(m.name, "triangle {}: its area overflows a float (coordinates too large)", i);
+      if (!(T.area > 0.0f)) why[i] = kZeroArea;
+      else if (opts.needUVs && T.uvArea2 == 0.0f) why[i] = kZeroUVArea;
+      else if (opts.needUVs && !(T.minNormalLength > 1e-6f)) {
+        const glm::uvec3& f = m.triangles[i];
+        fail(m.name,
+             "triangle {}: its vertex normals cancel inside the triangle (vertices {}, {}, {}): the "
+             "displacement direction is undefined there",
+             i, f[0], f[1], f[2]);
+      }
+    }
+    if (why[i] == kZeroArea) ++zeroArea;
+    if (why[i] == kZeroUVArea) ++zeroUV;
+    if (why[i] != kOk && first == m.triangles.size()) first = i;
+  }
+  const size_t skipped = zeroArea + zeroUV, total = m.triangles.size();
+  if (skipped == 0) return;
+  const std::string detail =
+      zeroUV ? fmt::format("zero area: {}, zero uv area: {}", zeroArea, zeroUV) : fmt::format("zero area: {}", zeroArea);
+  if (skipped == total) fail(m.name, "all {} triangles are degenerate ({})", total, detail);
+  size_t k = 0;
+  for (size_t i = 0; i < total; ++i)
+    if (why[i] == kOk) m.triangles[k++] = m.triangles[i];
+  m.triangles.resize(k);
+  m.skippedTriangles += skipped;
+  if (opts.warn)
+    fmt::print(stderr, "oblong: warning: {}: skipped {} of {} triangles as degenerate ({}; first: triangle {})\n",
+               m.name, skipped, total, detail, first);
+}
+
 Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -137,6 +248,7 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
   if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
 
   Assimp::Importer importer;
+  checkPlyHeader(path, importer);
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                   aiProcess_PreTransformVertices | aiProcess_SortByPType);
@@ -188,8 +300,7 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
     if (opts.needUVs) fail(path, "mesh has no texture coordinates (needed for displacement)");
     m.uvs.clear();  // partial uvs are useless without displacement
   }
-  fixNormals(m);
-  if (opts.transform != glm::mat4(1.0f)) transformMesh(m, opts.transform);
+  finishMesh(m, opts);
   return m;
 }
 

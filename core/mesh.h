@@ -17,6 +17,7 @@ struct Mesh {
   std::vector<vec3> normals;  // unit length, one per position
   std::vector<vec2> uvs;      // empty when the file has none
   std::vector<glm::uvec3> triangles;
+  size_t skippedTriangles = 0;  // degenerate triangles dropped by finishMesh (warned about)
 
   bool hasUVs() const { return !uvs.empty(); }
   DisplacedTriangle triangle(size_t i) const;
@@ -26,12 +27,22 @@ struct Mesh {
 struct MeshLoadOptions {
   glm::mat4 transform{1.0f};  // applied to positions (normals by the inverse transpose)
   bool needUVs = false;       // displaced meshes: a mesh without uvs is an error
+  bool warn = true;           // print a warning line on stderr for skipped triangles
 };
 
 // Loads every mesh of the file as one Mesh (node transforms applied). Vertex normals
 // are normalised; when the file has none, area-weighted smooth normals are computed,
 // accumulated per position so that uv seams do not split the normal. Errors name the file.
 Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts = {});
+
+// The checks every mesh goes through (loaded or generated), in this order: triangles
+// with zero area (or, when needUVs, zero uv area) are marked degenerate; zero and
+// non-finite normals are replaced by smooth ones (fixNormals); the transform is applied;
+// degenerate triangles are dropped with one warning line on stderr ("oblong: warning:
+// NAME: skipped K of N degenerate triangles (...)"). Errors (naming m.name): every
+// triangle degenerate, a triangle whose area overflows a float, a vertex or (when
+// needUVs) a triangle interior where the normals cancel.
+void finishMesh(Mesh& m, const MeshLoadOptions& opts);
 
 // Area-weighted smooth normals accumulated per distinct position.
 void computeSmoothNormals(Mesh& m);

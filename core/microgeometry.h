@@ -6,13 +6,19 @@
 // points exactly on the edge, T's vertices) is computed from that edge alone, with
 // its endpoints in a canonical order (lexicographic in uv), so the two triangles
 // sharing an edge produce bit-identical points along it.
+//
+// MicroCells is the one implementation: forEachMicroTriangle loops over cells with it,
+// and the traversal (render/traversal.h) calls it cell by cell. It allocates nothing,
+// so it can run in a per-ray hot loop, and both paths get bit-identical triangles.
 #pragma once
 
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/triangle.h"
 
+#include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 namespace oblong {
@@ -32,6 +38,86 @@ struct CellRange {
   int x0, y0, x1, y1;
 };
 CellRange cellsOverlapping(const DisplacedTriangle& T, const Displacement& d);
+
+namespace micro {
+// Lines of the construction: grid verticals x = c, horizontals y = c, diagonals
+// x - y = c (sample coordinates), and T's edges.
+enum class LineType : uint8_t { V, H, D, Edge };
+struct Line {
+  LineType type;
+  int c;
+};
+// Polygon vertex: where it came from decides how its world position is computed.
+enum class Kind : uint8_t { Grid, TVertex, Cross };
+struct PV {
+  dvec2 s;    // sample coordinates (for the side tests)
+  Kind kind;
+  int a, b;   // Grid: (i, j); TVertex: (k, -); Cross: (edge, -)
+  Line line;  // Cross: the grid line crossed
+  Line next;  // line carrying the polygon edge to the next vertex
+  bool same(const PV& o) const {
+    if (kind != o.kind) return false;
+    if (kind == Kind::Cross) return a == o.a && line.type == o.line.type && line.c == o.line.c;
+    return a == o.a && (kind == Kind::TVertex || b == o.b);
+  }
+};
+struct EdgeInfo {
+  int A, B;      // canonical endpoint order (vertex indices of T)
+  dvec2 SA, SB;  // their sample coordinates
+  double sigma;  // sign of orient(SA, SB, opposite vertex): the inside side
+};
+}  // namespace micro
+
+// Grid points already computed by MicroCells::cell for one triangle (direct-mapped,
+// keyed by the sample index): neighbouring cells share corners, a march along a ray
+// visits neighbouring cells. Only for one MicroCells (one triangle) at a time.
+struct GridVertexCache {
+  struct Entry {
+    int i = std::numeric_limits<int>::min(), j = 0;
+    MicroVertex v;
+  };
+  Entry e[64];
+  Entry& slot(int i, int j) { return e[(i & 7) | ((j & 7) << 3)]; }
+};
+
+// The micro-triangles of T cell by cell, without allocation. T and d must outlive it.
+class MicroCells {
+ public:
+  // A cell triangle clipped by T has at most 6 vertices (4 fan triangles); two halves.
+  static constexpr int kMaxPerCell = 8;
+
+  MicroCells(const DisplacedTriangle& T, const Displacement& d);
+
+  // Writes the micro-triangles of cell (i,j) (absolute sample indices; the map wraps)
+  // to out in the order forEachMicroTriangle emits them; returns how many (0 for a cell
+  // outside T). Cells whose four corners lie strictly inside T skip the clipping (the
+  // result is the same: clipping would keep every vertex).
+  int cell(int i, int j, MicroTriangle* out) const;
+  // The same, reusing grid points of interior cells from `cache` (same values bit for
+  // bit: they come from the same computation).
+  int cell(int i, int j, MicroTriangle* out, GridVertexCache& cache) const;
+
+  // True when the cell's four corners lie strictly inside T (two unclipped triangles).
+  bool interior(int i, int j) const;
+
+ private:
+  bool inside(int e, const dvec2& p) const;
+  bool strictlyInside(const dvec2& p) const;
+  double crossParamRaw(int e, const micro::Line& L) const;
+  double crossParam(int e, const micro::Line& L) const;
+  MicroVertex onEdge(int e, double t, float rawHeight) const;
+  float lineHeight(const micro::Line& L, const dvec2& s) const;
+  MicroVertex world(const micro::PV& v) const;
+  MicroVertex gridInterior(int i, int j) const;
+  MicroVertex gridInterior(int i, int j, GridVertexCache& cache) const;
+  int clipped(int i, int j, MicroTriangle* out) const;
+  int clip(int e, const micro::PV* in, int n, micro::PV* out) const;
+
+  const DisplacedTriangle& T_;
+  const Displacement& d_;
+  dvec2 S_[3];
+  micro::EdgeInfo E_[3];  // edge e joins vertices e and (e+1)%3
+};
 
 // Calls emit for every micro-triangle of T over the cells in `cells` (all of T's cells
 // by default), in cell order. Degenerate (repeated-vertex) triangles are not emitted.

@@ -79,6 +79,68 @@ Mesh quadMesh(float s, float y, int n) {
   return m;
 }
 
+Mesh planeMesh(vec2 size, ivec2 n, vec2 uv0, vec2 uv1) {
+  Mesh m;
+  m.name = "<procedural plane>";
+  for (int j = 0; j <= n.y; ++j)
+    for (int i = 0; i <= n.x; ++i) {
+      // (1-t) a + t b is exact at both ends: edges of neighbouring planes agree.
+      const float s = float(i) / float(n.x), t = float(j) / float(n.y);
+      m.positions.emplace_back(size.x * (s - 0.5f), 0.0f, size.y * (t - 0.5f));
+      m.normals.emplace_back(0.0f, 1.0f, 0.0f);
+      m.uvs.emplace_back((1 - s) * uv0.x + s * uv1.x, (1 - t) * uv0.y + t * uv1.y);
+    }
+  for (int j = 0; j < n.y; ++j)
+    for (int i = 0; i < n.x; ++i) {
+      const unsigned a = j * (n.x + 1) + i, b = a + 1, c = a + (n.x + 1), d = c + 1;
+      m.triangles.emplace_back(a, c, b);  // (c-a) x (b-a) = +y
+      m.triangles.emplace_back(b, c, d);
+    }
+  return m;
+}
+
+Mesh sphereMesh(float radius, int nu, int nv) {
+  constexpr double kPi = std::numbers::pi;
+  Mesh m;
+  m.name = "<procedural sphere>";
+  // Unit direction at colatitude theta (0 at the north pole, +y) and longitude phi. phi
+  // turns clockwise seen from +y, so that u increases to the right seen from outside.
+  auto dir = [](double theta, double phi) {
+    return vec3(float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)), float(-std::sin(theta) * std::sin(phi)));
+  };
+  auto add = [&](const vec3& n, vec2 uv) {
+    m.positions.push_back(radius * n);
+    m.normals.push_back(n);
+    m.uvs.push_back(uv);
+    return unsigned(m.positions.size() - 1);
+  };
+  // Rings j = 1 .. nv-1, nu+1 vertices each (i = nu repeats i = 0 bit for bit).
+  std::vector<unsigned> ring(size_t(nv + 1) * (nu + 1));
+  for (int j = 1; j < nv; ++j)
+    for (int i = 0; i <= nu; ++i) {
+      const vec3 n = dir(kPi * j / nv, 2.0 * kPi * (i % nu) / nu);
+      ring[size_t(j) * (nu + 1) + i] = add(n, vec2(float(i) / nu, float(j) / nv));
+    }
+  auto R = [&](int i, int j) { return ring[size_t(j) * (nu + 1) + i]; };
+  for (int i = 0; i < nu; ++i) {
+    const float u = (float(i) + 0.5f) / nu;
+    const unsigned north = add(vec3(0.0f, 1.0f, 0.0f), vec2(u, 0.0f));
+    m.triangles.emplace_back(north, R(i, 1), R(i + 1, 1));
+  }
+  for (int j = 1; j + 1 < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const unsigned a = R(i, j), b = R(i + 1, j), c = R(i, j + 1), d = R(i + 1, j + 1);
+      m.triangles.emplace_back(a, c, b);
+      m.triangles.emplace_back(b, c, d);
+    }
+  for (int i = 0; i < nu; ++i) {
+    const float u = (float(i) + 0.5f) / nu;
+    const unsigned south = add(vec3(0.0f, -1.0f, 0.0f), vec2(u, 1.0f));
+    m.triangles.emplace_back(south, R(i + 1, nv - 1), R(i, nv - 1));
+  }
+  return m;
+}
+
 Scene defaultScene() {
   Scene s;
   s.path = "<default>";

@@ -4,9 +4,11 @@
 #include "core/scene.h"
 
 #include "core/error.h"
+#include "core/procedural.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -20,11 +22,26 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
+// A JSON value in an error message: ASCII only (no raw newline can break the one-line
+// rule), invalid UTF-8 replaced, at most ~60 characters.
+std::string shown(const json& v) {
+  std::string s = v.dump(-1, ' ', /*ensure_ascii=*/true, json::error_handler_t::replace);
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
+// An object key in an error message: as is when it is short printable ASCII.
+std::string shownKey(const std::string& k) {
+  const bool plain = k.size() <= 60 && std::all_of(k.begin(), k.end(), [](char c) { return c >= 0x20 && c < 0x7f; });
+  if (plain) return k;
+  const std::string q = shown(json(k));  // "..."-quoted and escaped
+  return q.size() >= 2 && q.front() == '"' ? q.substr(1, q.size() - (q.back() == '"' ? 2 : 1)) : q;
+}
+
 // Reads one JSON object; remembers where it is for error messages.
 class Reader {
  public:
   Reader(const json& j, std::string file, std::string key) : j_(j), file_(std::move(file)), key_(std::move(key)) {
-    if (!j_.is_object()) error("must be an object, got {}", j_.dump());
+    if (!j_.is_object()) error("must be an object, got {}", shown(j_));
   }
 
   template <typename... Args>
@@ -41,10 +58,13 @@ class Reader {
   bool has(const std::string& k) const { return j_.contains(k); }
   const json& at(const std::string& k) const { return j_.at(k); }
 
+  const json& value() const { return j_; }
+  const std::string& key() const { return key_; }
+
   void allowOnly(std::initializer_list<const char*> keys) const {
     const std::set<std::string> ok(keys.begin(), keys.end());
     for (const auto& [k, v] : j_.items())
-      if (!ok.count(k)) fail(file_, "unknown key '{}'", path(k));
+      if (!ok.count(k)) fail(file_, "unknown key '{}'", path(shownKey(k)));
   }
   void require(const std::string& k) const {
     if (!has(k)) errorAt(k, "missing (required)");
@@ -58,25 +78,33 @@ class Reader {
   }
   std::string string(const std::string& k) const {
     const json& v = j_.at(k);
-    if (!v.is_string() || v.get<std::string>().empty()) errorAt(k, "must be a non-empty string, got {}", v.dump());
+    if (!v.is_string() || v.get<std::string>().empty()) errorAt(k, "must be a non-empty string, got {}", shown(v));
     return v.get<std::string>();
   }
   bool boolean(const std::string& k, bool def) const {
     if (!has(k)) return def;
-    if (!j_.at(k).is_boolean()) errorAt(k, "must be true or false, got {}", j_.at(k).dump());
+    if (!j_.at(k).is_boolean()) errorAt(k, "must be true or false, got {}", shown(j_.at(k)));
     return j_.at(k).get<bool>();
   }
   int positiveInt(const std::string& k, int def) const {
     if (!has(k)) return def;
+    return toPositiveInt(j_.at(k), path(k), 1 << 20);
+  }
+  // A positive integer (all components equal) or an array of n positive integers, each
+  // at most `max`.
+  std::vector<int> intOrArray(const std::string& k, size_t n, int def, int max) const {
+    if (!has(k)) return std::vector<int>(n, def);
     const json& v = j_.at(k);
-    if (!v.is_number_integer() || v.get<int64_t>() <= 0 || v.get<int64_t>() > (1 << 20))
-      errorAt(k, "must be a positive integer (at most 2^20), got {}", v.dump());
-    return int(v.get<int64_t>());
+    if (v.is_number()) return std::vector<int>(n, toPositiveInt(v, path(k), max));
+    if (!v.is_array() || v.size() != n) errorAt(k, "must be a positive integer or an array of {}, got {}", n, shown(v));
+    std::vector<int> r;
+    for (size_t i = 0; i < n; ++i) r.push_back(toPositiveInt(v[i], fmt::format("{}[{}]", path(k), i), max));
+    return r;
   }
   // Exactly n finite numbers.
   std::vector<float> numbers(const std::string& k, size_t n) const {
     const json& v = j_.at(k);
-    if (!v.is_array() || v.size() != n) errorAt(k, "must be an array of {} numbers, got {}", n, v.dump());
+    if (!v.is_array() || v.size() != n) errorAt(k, "must be an array of {} numbers, got {}", n, shown(v));
     std::vector<float> r;
     for (size_t i = 0; i < n; ++i) r.push_back(toNumber(v[i], fmt::format("{}[{}]", path(k), i)));
     return r;
@@ -90,17 +118,25 @@ class Reader {
   std::vector<float> numberOrArray(const std::string& k, size_t n, float def) const {
     if (!has(k)) return std::vector<float>(n, def);
     if (j_.at(k).is_number()) return std::vector<float>(n, number(k, def));
-    if (!j_.at(k).is_array()) errorAt(k, "must be a number or an array of {} numbers, got {}", n, j_.at(k).dump());
+    if (!j_.at(k).is_array()) errorAt(k, "must be a number or an array of {} numbers, got {}", n, shown(j_.at(k)));
     return numbers(k, n);
   }
 
  private:
   float toNumber(const json& v, const std::string& where) const {
-    if (!v.is_number()) fail(file_, "{}: must be a number, got {}", where, v.dump());
+    if (!v.is_number()) fail(file_, "{}: must be a number, got {}", where, shown(v));
     const double d = v.get<double>();
     if (!std::isfinite(d) || std::abs(d) > std::numeric_limits<float>::max())
-      fail(file_, "{}: must be a finite number, got {}", where, v.dump());
+      fail(file_, "{}: must be a finite number, got {}", where, shown(v));
     return float(d);
+  }
+  int toPositiveInt(const json& v, const std::string& where, int max) const {
+    // Unsigned values beyond int64 would wrap in get<int64_t>(): compare as unsigned.
+    const bool ok = v.is_number_unsigned() ? v.get<uint64_t>() >= 1 && v.get<uint64_t>() <= uint64_t(max)
+                    : v.is_number_integer() ? v.get<int64_t>() >= 1 && v.get<int64_t>() <= max
+                                            : false;
+    if (!ok) fail(file_, "{}: must be a positive integer (at most {}), got {}", where, max, shown(v));
+    return int(v.get<int64_t>());
   }
 
   const json& j_;
@@ -110,13 +146,16 @@ class Reader {
 // Arrays of objects ("lights", "meshes").
 const json& array(const Reader& r, const std::string& k) {
   const json& v = r.at(k);
-  if (!v.is_array()) r.errorAt(k, "must be an array, got {}", v.dump());
+  if (!v.is_array()) r.errorAt(k, "must be an array, got {}", shown(v));
   return v;
 }
 
 ivec2 parseImage(const Reader& r) {
   r.allowOnly({"width", "height"});
-  return {r.positiveInt("width", 640), r.positiveInt("height", 480)};
+  const ivec2 size{r.positiveInt("width", 640), r.positiveInt("height", 480)};
+  if (int64_t(size.x) * size.y > (int64_t(1) << 26))
+    r.error("{}x{} pixels is more than the supported 2^26 (8192x8192)", size.x, size.y);
+  return size;
 }
 
 Camera parseCamera(const Reader& r) {
@@ -203,7 +242,7 @@ std::string resolve(const std::string& sceneFile, const std::string& p) {
 }
 
 Displacement parseDisplacement(const Reader& r, MapCache& cache) {
-  r.allowOnly({"map", "scale", "bias", "tiling", "flip_v"});
+  r.allowOnly({"map", "scale", "bias", "tiling", "flip_v"});  // = kDisplacementKeys
   r.require("map");
   Displacement d;
   const std::string file = resolve(r.file(), r.string("map"));
@@ -229,11 +268,94 @@ Displacement parseDisplacement(const Reader& r, MapCache& cache) {
   return d;
 }
 
+const std::initializer_list<const char*> kMeshKeys = {"file", "shape", "transform", "albedo", "displacement"};
+const std::initializer_list<const char*> kDisplacementKeys = {"map", "scale", "bias", "tiling", "flip_v"};
+const std::initializer_list<const char*> kTransformKeys = {"translate", "rotate", "scale", "matrix"};
+
+// Keys each shape type accepts (besides "type").
+const std::map<std::string, std::vector<std::string>> kShapeKeys = {
+    {"plane", {"type", "size", "segments", "uv"}},
+    {"sphere", {"type", "radius", "segments"}},
+    {"torus", {"type", "major_radius", "minor_radius", "segments"}},
+};
+constexpr int kMaxSegments = 1 << 14;           // per direction
+constexpr int64_t kMaxShapeQuads = int64_t(1) << 22;  // ~8M triangles
+
+void checkShapeKeys(const Reader& r) {
+  r.require("type");
+  const std::string type = r.string("type");
+  const auto it = kShapeKeys.find(type);
+  if (it == kShapeKeys.end()) r.errorAt("type", "unknown shape '{}' (known: plane, sphere, torus)", shownKey(type));
+  std::set<std::string> ok(it->second.begin(), it->second.end());
+  for (const auto& [k, v] : r.value().items())
+    if (!ok.count(k)) fail(r.file(), "unknown key '{}' (a {} takes {})", r.path(shownKey(k)), type,
+                           fmt::join(std::vector<std::string>(it->second.begin() + 1, it->second.end()), ", "));
+}
+
+// A procedural mesh (docs/scene_format.md, "Shapes"). Its name in errors is
+// "<procedural TYPE>".
+Mesh parseShape(const Reader& r) {
+  checkShapeKeys(r);
+  const std::string type = r.string("type");
+  auto segments = [&](int du, int dv, int minU, int minV) {
+    const auto n = r.intOrArray("segments", 2, 0, kMaxSegments);
+    const ivec2 seg = r.has("segments") ? ivec2(n[0], n[1]) : ivec2(du, dv);
+    if (seg.x < minU || seg.y < minV) r.errorAt("segments", "a {} needs at least [{}, {}], got [{}, {}]", type, minU, minV, seg.x, seg.y);
+    if (int64_t(seg.x) * seg.y > kMaxShapeQuads)
+      r.errorAt("segments", "[{}, {}] is more than the supported {} quads", seg.x, seg.y, kMaxShapeQuads);
+    return seg;
+  };
+  if (type == "plane") {
+    const auto size = r.numberOrArray("size", 2, 2.0f);
+    if (!(size[0] > 0.0f && size[1] > 0.0f)) r.errorAt("size", "must be positive, got [{}, {}]", size[0], size[1]);
+    const ivec2 seg = segments(1, 1, 1, 1);
+    vec2 uv0(0.0f), uv1(1.0f);
+    if (r.has("uv")) {
+      const auto uv = r.numbers("uv", 4);
+      uv0 = vec2(uv[0], uv[1]), uv1 = vec2(uv[2], uv[3]);
+      if (!(uv0.x < uv1.x && uv0.y < uv1.y)) r.errorAt("uv", "must be [u0, v0, u1, v1] with u0 < u1 and v0 < v1");
+    }
+    return planeMesh(vec2(size[0], size[1]), seg, uv0, uv1);
+  }
+  if (type == "sphere") {
+    const float radius = r.number("radius", 1.0f);
+    if (!(radius > 0.0f)) r.errorAt("radius", "must be positive, got {}", radius);
+    const ivec2 seg = segments(64, 32, 3, 2);
+    return sphereMesh(radius, seg.x, seg.y);
+  }
+  // torus
+  const float R = r.number("major_radius", 1.0f), rr = r.number("minor_radius", 0.4f);
+  if (!(rr > 0.0f && rr < R)) r.error("needs 0 < minor_radius < major_radius, got {} and {}", rr, R);
+  const ivec2 seg = segments(48, 24, 3, 3);
+  return torusMesh(R, rr, seg.x, seg.y);
+}
+
+// Limits that keep a displaced mesh within what floats and the integer sample grid can
+// represent (DESIGN §3 invariant 6): finite heights, sample coordinates within ±2^30.
+void checkDisplacement(const Reader& r, const Mesh& mesh, const Displacement& d) {
+  const Interval raw = d.map->range();
+  const double lo = double(d.scale) * (double(raw.lo) + d.bias), hi = double(d.scale) * (double(raw.hi) + d.bias);
+  const float flo = float(lo), fhi = float(hi);
+  if (!std::isfinite(flo) || !std::isfinite(fhi) || !std::isfinite(raw.lo + d.bias) || !std::isfinite(raw.hi + d.bias))
+    r.errorAt("displacement.scale", "heights scale * (H + bias) overflow a float for the map's H in [{}, {}]", raw.lo,
+              raw.hi);
+  vec2 maxUV(0.0f);
+  for (const glm::uvec3& f : mesh.triangles)
+    for (int k = 0; k < 3; ++k) maxUV = glm::max(maxUV, glm::abs(mesh.uvs[f[k]]));
+  const double su = double(maxUV.x) * d.tiling.x * d.map->width(), sv = double(maxUV.y) * d.tiling.y * d.map->height();
+  constexpr double kMaxSample = double(1 << 30);
+  if (!(su < kMaxSample && sv < kMaxSample))
+    r.errorAt("displacement.tiling",
+              "uvs up to ({}, {}) times tiling ({}, {}) times the map size {}x{} reach sample {:.3g}: more than the "
+              "supported 2^30",
+              maxUV.x, maxUV.y, d.tiling.x, d.tiling.y, d.map->width(), d.map->height(), std::max(su, sv));
+}
+
 SceneMesh parseMesh(const Reader& r, MapCache& cache) {
-  r.allowOnly({"file", "transform", "albedo", "displacement"});
-  r.require("file");
+  r.allowOnly(kMeshKeys);
+  if (r.has("file") && r.has("shape")) r.error("give either 'file' or 'shape', not both");
+  if (!r.has("shape") && !r.has("file")) r.errorAt("file", "missing (required, unless the mesh is a 'shape')");
   SceneMesh sm;
-  const std::string file = resolve(r.file(), r.string("file"));
   MeshLoadOptions opts;
   if (r.has("transform")) opts.transform = parseTransform(r.object("transform"));
   sm.albedo = r.vector3("albedo", sm.albedo);
@@ -243,25 +365,70 @@ SceneMesh parseMesh(const Reader& r, MapCache& cache) {
     opts.needUVs = true;
     sm.displacement = parseDisplacement(r.object("displacement"), cache);
   }
-  try {
-    sm.mesh = loadMesh(file, opts);
-  } catch (const Error& e) {
-    r.errorAt("file", "{}", e.what());
+  if (r.has("shape")) {
+    const Reader sr = r.object("shape");
+    sm.mesh = parseShape(sr);
+    try {
+      finishMesh(sm.mesh, opts);
+    } catch (const Error& e) {
+      r.errorAt("shape", "{}", e.what());
+    }
+  } else {
+    const std::string file = resolve(r.file(), r.string("file"));
+    try {
+      sm.mesh = loadMesh(file, opts);
+    } catch (const Error& e) {
+      r.errorAt("file", "{}", e.what());
+    }
   }
+  if (sm.displacement) checkDisplacement(r, sm.mesh, *sm.displacement);
   return sm;
 }
 
 // Key check of a mesh entry without loading anything, so that a typo in the last mesh
 // is reported before the first (slow) mesh load.
 void checkMeshKeys(const Reader& r) {
-  r.allowOnly({"file", "transform", "albedo", "displacement"});
-  if (r.has("transform")) r.object("transform").allowOnly({"translate", "rotate", "scale", "matrix"});
-  if (r.has("displacement")) r.object("displacement").allowOnly({"map", "scale", "bias", "tiling", "flip_v"});
+  r.allowOnly(kMeshKeys);
+  if (r.has("transform")) r.object("transform").allowOnly(kTransformKeys);
+  if (r.has("displacement")) r.object("displacement").allowOnly(kDisplacementKeys);
+  if (r.has("shape")) checkShapeKeys(r.object("shape"));
+}
+
+// strategies.NAME: {"name": ..., params...}; the parameters are checked by the strategy.
+void parseStrategy(const Reader& st, const std::string& slot, StrategyChoice& out) {
+  if (!st.has(slot)) return;
+  const Reader r = st.object(slot);
+  r.require("name");
+  out.name = r.string("name");
+  out.params = json::object();
+  for (const auto& [k, v] : r.value().items())
+    if (k != "name") out.params[k] = v;  // validated by the strategy itself
+  out.where = r.file() + ": " + r.key();
 }
 
 }  // namespace
 
-Scene parseScene(const json& j, const std::string& path) {
+namespace {
+
+// Nesting depth, measured without recursion: copying or printing a value recurses, so a
+// document nested 100 000 deep would overflow the stack there.
+constexpr size_t kMaxDepth = 64;
+size_t depthOf(const json& j) {
+  size_t deepest = 0;
+  std::vector<std::pair<const json*, size_t>> stack{{&j, 1}};
+  while (!stack.empty()) {
+    const auto [v, d] = stack.back();
+    stack.pop_back();
+    deepest = std::max(deepest, d);
+    if (d > kMaxDepth) break;
+    if (v->is_structured())
+      for (const auto& child : *v) stack.emplace_back(&child, d + 1);
+  }
+  return deepest;
+}
+
+Scene parseSceneImpl(const json& j, const std::string& path) {
+  if (depthOf(j) > kMaxDepth) fail(path, "nested deeper than {} levels", kMaxDepth);
   const Reader top(j, path, "");
   top.allowOnly({"image", "camera", "lights", "meshes", "strategies"});
   Scene s;
@@ -274,16 +441,13 @@ Scene parseScene(const json& j, const std::string& path) {
   }
   if (top.has("strategies")) {
     const Reader st = top.object("strategies");
-    st.allowOnly({"range"});
-    if (st.has("range")) {
-      const Reader r = st.object("range");
-      r.require("name");
-      s.range.name = r.string("name");
-      s.range.params = json::object();
-      for (const auto& [k, v] : j.at("strategies").at("range").items())
-        if (k != "name") s.range.params[k] = v;  // validated by the strategy itself
-      s.range.where = path + ": strategies.range";
-    }
+    st.allowOnly({"range", "inverter", "splitter", "marching_scale", "inversion_in_traversal"});
+    parseStrategy(st, "range", s.range);
+    parseStrategy(st, "inverter", s.inverter);
+    parseStrategy(st, "splitter", s.splitter);
+    s.marchingScale = st.number("marching_scale", s.marchingScale);
+    if (!(s.marchingScale > 0.0f)) st.errorAt("marching_scale", "must be positive (texels), got {}", s.marchingScale);
+    s.inversionInTraversal = st.boolean("inversion_in_traversal", s.inversionInTraversal);
   }
   top.require("meshes");
   const json& meshes = array(top, "meshes");
@@ -298,20 +462,42 @@ Scene parseScene(const json& j, const std::string& path) {
   return s;
 }
 
-Scene loadScene(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "file not found");
-  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
-  std::ifstream in(path);
-  if (!in) fail(path, "cannot open file");
-  json j;
+// Every error is one line, whatever a file name or a library message contains.
+[[noreturn]] void rethrowOneLine(const Error& e) {
+  std::string msg = e.what();
+  for (char& c : msg)
+    if (c == '\n' || c == '\r') c = ' ';
+  throw Error(msg);
+}
+
+}  // namespace
+
+Scene parseScene(const json& j, const std::string& path) {
   try {
-    // Comments are allowed: scene files are written by hand.
-    j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const json::exception& e) {  // parse_error, or out_of_range for 1e400
-    fail(path, "malformed JSON: {}", e.what());
+    return parseSceneImpl(j, path);
+  } catch (const Error& e) {
+    rethrowOneLine(e);
   }
-  return parseScene(j, path);
+}
+
+Scene loadScene(const std::string& path) {
+  try {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) fail(path, "file not found");
+    if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+    std::ifstream in(path);
+    if (!in) fail(path, "cannot open file");
+    json j;
+    try {
+      // Comments are allowed: scene files are written by hand.
+      j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
+    } catch (const json::exception& e) {  // parse_error, or out_of_range for 1e400
+      fail(path, "malformed JSON: {}", e.what());
+    }
+    return parseSceneImpl(j, path);
+  } catch (const Error& e) {
+    rethrowOneLine(e);
+  }
 }
 
 }  // namespace oblong

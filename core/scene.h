@@ -46,6 +46,10 @@ struct Scene {
   Camera camera;
   std::vector<Light> lights;
   StrategyChoice range{"rmip", nlohmann::json::object(), "<default>: strategies.range"};
+  StrategyChoice inverter{"newton", nlohmann::json::object(), "<default>: strategies.inverter"};
+  StrategyChoice splitter{"midpoint2d", nlohmann::json::object(), "<default>: strategies.splitter"};
+  float marchingScale = 4.0f;        // texels: rectangles at most this size are marched
+  bool inversionInTraversal = true;  // invert box intervals to tighten rectangles
   ivec2 imageSize{640, 480};
 };
 

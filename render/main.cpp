@@ -1,13 +1,19 @@
 // oblong: command-line front end.
-//   oblong render [SCENE.json] -o out.png [--size WxH] [--threads N] [--stats out.json]
+//   oblong render [SCENE.json] -o out.png [--size WxH] [--spp N] [--integrator primary|ao|path] [--seed S]
+//                 [--threads N] [--aovs out.exr] [--heatmap steps.png] [--stats out.json] [strategy flags]
+//   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv [--stats out.json] [strategy flags]
 //   oblong info   [SCENE.json] [--range NAME]
+// Strategy flags (override the scene's "strategies" block): --range, --inverter,
+// --splitter, --marching-scale, --inversion-in-traversal, --baseline, --step.
 // Without a scene file, the built-in default scene is used (no data files needed).
 // Every bad input ends with one line "oblong: FILE: problem" and exit status 1.
 #include "core/error.h"
 #include "core/procedural.h"
 #include "core/scene.h"
 #include "core/stats.h"
+#include "inversion/ceres.h"
 #include "render/embree_scene.h"
+#include "render/rays_io.h"
 #include "render/renderer.h"
 #include "strategies/range_query.h"
 
@@ -15,7 +21,12 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
 #include <fstream>
+#include <optional>
 #include <regex>
 
 using namespace oblong;
@@ -55,40 +66,192 @@ std::vector<std::unique_ptr<RangeQuery>> buildRangeQueries(const Scene& scene, c
   return out;
 }
 
-int runRender(const std::string& scenePath, const std::string& out, const std::string& size, int threads,
-              const std::string& statsPath) {
+// Strategy flags shared by render and trace; unset flags keep the scene's choice.
+struct StrategyFlags {
+  std::string range, inverter, splitter, baseline;
+  std::optional<float> marchingScale, step;
+  std::optional<bool> inversionInTraversal;
+
+  void add(CLI::App* app) {
+    app->add_option("--range", range, "RangeQuery: rmip | minmax_mipmap | safety_zones");
+    app->add_option("--inverter", inverter, "Inverter: newton | cubic | ceres");
+    app->add_option("--splitter", splitter, "Splitter: midpoint2d | midpoint3d | quadtree");
+    app->add_option("--marching-scale", marchingScale, "rectangles of at most this many texels are marched");
+    app->add_option("--inversion-in-traversal", inversionInTraversal, "invert box intervals (true | false)");
+    app->add_option("--baseline", baseline, "tessellated | bruteforce | fixedstep (instead of the traversal)")
+        ->check(CLI::IsMember({"tessellated", "bruteforce", "fixedstep"}));
+    app->add_option("--step", step, "world-space step of --baseline fixedstep (default: one texel)");
+  }
+
+  AccelOptions resolve(const Scene& scene) const {
+    AccelOptions o;
+    o.traversal = traversalConfigOf(scene);
+    TraversalConfig& c = o.traversal;
+    // A flag naming another strategy than the scene's drops the scene's parameters for it.
+    auto pick = [](std::string& name, nlohmann::json& params, const std::string& flag) {
+      if (flag.empty() || flag == name) return;
+      name = flag;
+      params = nlohmann::json::object();
+    };
+    pick(c.range, c.rangeParams, range);
+    pick(c.inverter, c.inverterParams, inverter);
+    pick(c.splitter, c.splitterParams, splitter);
+    if (marchingScale) {
+      if (!(*marchingScale > 0)) fail("--marching-scale", "must be > 0, got {}", *marchingScale);
+      c.marchingScale = *marchingScale;
+    }
+    if (inversionInTraversal) c.inversionInTraversal = *inversionInTraversal;
+    if (step) {
+      if (!(*step > 0)) fail("--step", "must be > 0, got {}", *step);
+      if (baseline != "fixedstep") fail("--step", "only applies to --baseline fixedstep");
+      c.fixedStep = *step;
+    }
+    if (baseline == "tessellated") o.tessellate = true;
+    else c.baseline = baseline;
+    if (c.inverter == "ceres") registerCeresInverter();
+    return o;
+  }
+};
+
+nlohmann::json configJson(const AccelOptions& o) {
+  const TraversalConfig& c = o.traversal;
+  if (o.tessellate) return {{"baseline", "tessellated"}};
+  nlohmann::json j = {{"range", {{"name", c.range}, {"params", c.rangeParams}}},
+                      {"inverter", {{"name", c.inverter}, {"params", c.inverterParams}}},
+                      {"splitter", {{"name", c.splitter}, {"params", c.splitterParams}}},
+                      {"marching_scale", c.marchingScale},
+                      {"inversion_in_traversal", c.inversionInTraversal}};
+  if (!c.baseline.empty()) j["baseline"] = c.baseline;
+  if (c.baseline == "fixedstep") j["step"] = c.fixedStep;
+  return j;
+}
+
+nlohmann::json countersJson(const RayCounters& c, int64_t rays) {
+  const double n = double(std::max<int64_t>(1, rays));
+  return {{"boxes", c.boxes},
+          {"range_queries", c.rangeQueries},
+          {"inversions", c.inversions},
+          {"cells_marched", c.cellsMarched},
+          {"micro_triangles", c.microTriangles},
+          {"prisms", c.prisms},
+          {"steps", c.steps()},
+          {"steps_per_ray", double(c.steps()) / n}};
+}
+
+void writeJson(const std::string& path, const nlohmann::json& j) {
+  std::ofstream f(path);
+  if (!f) fail(path, "cannot write statistics");
+  f << j.dump(2) << "\n";
+}
+
+struct RenderFlags {
+  std::string out = "oblong.png", size, statsPath, aovs, heatmap, integrator = "path";
+  int threads = 0, spp = 1, maxDepth = 5;
+  uint64_t seed = 0;
+  bool quiet = false;
+};
+
+int runRender(const std::string& scenePath, const RenderFlags& f, const StrategyFlags& flags) {
   Scene scene = sceneFrom(scenePath);
+  const AccelOptions accelOpts = flags.resolve(scene);
   RenderOptions opts;
-  opts.size = size.empty() ? scene.imageSize : parseSize(size);
-  opts.threads = threads;
-  if (threads < 0) fail("--threads", "must be >= 0, got {}", threads);
+  opts.size = f.size.empty() ? scene.imageSize : parseSize(f.size);
+  if (f.threads < 0) fail("--threads", "must be >= 0, got {}", f.threads);
+  if (f.spp <= 0) fail("--spp", "must be >= 1, got {}", f.spp);
+  if (f.maxDepth <= 0) fail("--max-depth", "must be >= 1, got {}", f.maxDepth);
+  opts.threads = f.threads;
+  opts.spp = f.spp;
+  opts.maxDepth = f.maxDepth;
+  opts.seed = f.seed;
+  opts.integrator = parseIntegrator(f.integrator);
+  opts.progress = !f.quiet;
   Stats::reset();
-  EmbreeScene accel(scene);
-  RenderResult res = renderDirect(scene, accel, opts);
-  writeImage(res.image, out);
+  EmbreeScene accel(scene, accelOpts);
+  RenderResult res = render(scene, accel, opts);
+  writeImage(res.aov.color, f.out);
+  if (!f.aovs.empty()) writeAOVs(res.aov, f.aovs);
+  if (!f.heatmap.empty()) writeHeatMap(res.aov, f.heatmap);
   const MemoryReport mem = accel.memory();
-  const double rays = double(res.primaryRays + res.shadowRays);
-  fmt::print("oblong render: {} -> {}\n", scene.path, out);
-  fmt::print("  geometry : pre-tessellated (baseline), {} base triangles, {} micro-triangles, built in {:.2f} s\n",
-             accel.baseTriangles(), accel.microTriangles(), accel.buildSeconds());
+  const double rays = double(res.primaryRays + res.secondaryRays);
+  const double mrays = rays / std::max(res.seconds, 1e-9) * 1e-6;
+  double meanPrimarySteps = 0;
+  for (float st : res.aov.steps) meanPrimarySteps += st;
+  meanPrimarySteps /= double(std::max<size_t>(1, res.aov.steps.size()));
+  fmt::print("oblong render: {} -> {}\n", scene.path, f.out);
+  if (accel.tessellated())
+    fmt::print("  geometry : pre-tessellated (baseline), {} base triangles, {} micro-triangles, built in {:.2f} s\n",
+               accel.baseTriangles(), accel.microTriangles(), accel.buildSeconds());
+  else
+    fmt::print("  geometry : {}, {} base triangles, built in {:.2f} s\n", accel.geometryName(),
+               accel.baseTriangles(), accel.buildSeconds());
   for (const auto& m : mem) fmt::print("  memory   : {:<24} {}\n", m.name, human(m.bytes));
-  fmt::print("  summary  : {}x{}, {:.3f} s, {:.2f} Mrays/s ({} primary + {} shadow rays, {:.1f}% hit), memory {}\n",
-             opts.size.x, opts.size.y, res.seconds, rays / res.seconds * 1e-6, res.primaryRays, res.shadowRays,
-             100.0 * res.hits / std::max<int64_t>(1, res.primaryRays), human(totalBytes(mem)));
+  fmt::print(
+      "  summary  : {}x{} {} spp {}, {:.3f} s, {:.2f} Mrays/s ({} camera + {} secondary rays, {:.1f}% hit), "
+      "{:.1f} steps/camera ray, {:.1f} steps/ray, memory {}\n",
+      opts.size.x, opts.size.y, opts.spp, integratorName(opts.integrator), res.seconds, mrays, res.primaryRays,
+      res.secondaryRays, 100.0 * res.hits / std::max<int64_t>(1, res.primaryRays), meanPrimarySteps,
+      double(res.counters.steps()) / std::max(1.0, rays), human(totalBytes(mem)));
+  if (!f.statsPath.empty()) {
+    nlohmann::json j;
+    j["scene"] = scene.path;
+    j["geometry"] = accel.geometryName();
+    j["config"] = configJson(accelOpts);
+    j["image"] = {{"width", opts.size.x}, {"height", opts.size.y}, {"file", f.out}};
+    j["integrator"] = integratorName(opts.integrator);
+    j["spp"] = opts.spp;
+    j["seed"] = opts.seed;
+    j["threads"] = f.threads;
+    j["seconds"] = {{"build", accel.buildSeconds()}, {"render", res.seconds}};
+    j["rays"] = {{"primary", res.primaryRays}, {"secondary", res.secondaryRays}, {"hits", res.hits}};
+    j["mrays_per_second"] = mrays;
+    j["steps_per_camera_ray"] = meanPrimarySteps;
+    for (const auto& m : mem) j["memory"][m.name] = m.bytes;
+    j["memory_total"] = totalBytes(mem);
+    j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
+    j["counters"] = Stats::snapshot();
+    writeJson(f.statsPath, j);
+  }
+  return 0;
+}
+
+int runTrace(const std::string& scenePath, const std::string& raysPath, const std::string& out, int threads,
+             const std::string& statsPath, const StrategyFlags& flags) {
+  if (threads < 0) fail("--threads", "must be >= 0, got {}", threads);
+  Scene scene = sceneFrom(scenePath);
+  const AccelOptions accelOpts = flags.resolve(scene);
+  const std::vector<Ray> rays = readRays(raysPath);
+  Stats::reset();
+  EmbreeScene accel(scene, accelOpts);
+  std::vector<Hit> hits(rays.size());
+  std::vector<RayCounters> perRay(rays.size());
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+  const auto start = std::chrono::steady_clock::now();
+  tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) { hits[i] = accel.intersect(rays[i], &perRay[i]); });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  writeHits(out, hits);
+  RayCounters total;
+  size_t found = 0;
+  for (size_t i = 0; i < rays.size(); ++i) total += perRay[i], found += hits[i].valid();
+  const MemoryReport mem = accel.memory();
+  fmt::print("oblong trace: {} rays -> {}: {} hits, {}, {:.3f} s, {:.2f} Mrays/s, {:.1f} steps/ray, memory {}\n",
+             rays.size(), out, found, accel.geometryName(), seconds, rays.size() / std::max(seconds, 1e-9) * 1e-6,
+             double(total.steps()) / std::max<size_t>(1, rays.size()), human(totalBytes(mem)));
   if (!statsPath.empty()) {
     nlohmann::json j;
     j["scene"] = scene.path;
-    j["geometry"] = "tessellated";
-    j["image"] = {{"width", opts.size.x}, {"height", opts.size.y}, {"file", out}};
+    j["rays"] = {{"file", raysPath}, {"count", rays.size()}, {"hits", found}};
+    j["geometry"] = accel.geometryName();
+    j["config"] = configJson(accelOpts);
     j["threads"] = threads;
-    j["seconds"] = {{"build", accel.buildSeconds()}, {"render", res.seconds}};
-    j["rays"] = {{"primary", res.primaryRays}, {"shadow", res.shadowRays}, {"hits", res.hits}};
-    j["mrays_per_second"] = rays / res.seconds * 1e-6;
+    j["seconds"] = {{"build", accel.buildSeconds()}, {"trace", seconds}};
+    j["mrays_per_second"] = rays.size() / std::max(seconds, 1e-9) * 1e-6;
     for (const auto& m : mem) j["memory"][m.name] = m.bytes;
+    j["memory_total"] = totalBytes(mem);
+    j["ray_counters"] = countersJson(total, int64_t(rays.size()));
     j["counters"] = Stats::snapshot();
-    std::ofstream f(statsPath);
-    if (!f) fail(statsPath, "cannot write statistics");
-    f << j.dump(2) << "\n";
+    writeJson(statsPath, j);
   }
   return 0;
 }
@@ -126,15 +289,34 @@ int runInfo(const std::string& scenePath, const std::string& range) {
 int main(int argc, char** argv) {
   CLI::App app{"oblong: ray tracing displaced triangle meshes without tessellation"};
   app.require_subcommand(1);
-  std::string scenePath, out = "oblong.png", size, statsPath, range;
+  std::string scenePath, statsPath, range, raysPath, hitsPath = "hits.csv";
   int threads = 0;
+  StrategyFlags flags;
+  RenderFlags rf;
 
   auto* render = app.add_subcommand("render", "render a scene (default: the built-in scene)");
   render->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
-  render->add_option("-o,--output", out, "output image (.png, .exr, ...)");
-  render->add_option("--size", size, "image size WxH (default: the scene's)");
-  render->add_option("--threads", threads, "worker threads (0: all cores)");
-  render->add_option("--stats", statsPath, "write configuration, timings, counters and memory as JSON");
+  render->add_option("-o,--output", rf.out, "output image (.png, .exr, ...)");
+  render->add_option("--size", rf.size, "image size WxH (default: the scene's)");
+  render->add_option("--threads", rf.threads, "worker threads (0: all cores)");
+  render->add_option("--spp", rf.spp, "samples per pixel");
+  render->add_option("--integrator", rf.integrator, "primary | ao | path");
+  render->add_option("--max-depth", rf.maxDepth, "path: longest path (vertices)");
+  render->add_option("--seed", rf.seed, "random seed (same seed, same image, any thread count)");
+  render->add_option("--aovs", rf.aovs, "multi-channel EXR: colour, depth, normal, per-pixel counters");
+  render->add_option("--heatmap", rf.heatmap, "false-colour log-scale heat map of traversal steps (PNG)");
+  render->add_flag("-q,--quiet", rf.quiet, "no progress bar");
+  render->add_option("--stats", rf.statsPath, "write configuration, timings, counters and memory as JSON");
+  flags.add(render);
+
+  auto* trace = app.add_subcommand("trace", "first hit of every ray of a ray file");
+  trace->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  trace->add_option("--rays", raysPath, "rays: CSV (ox,oy,oz,dx,dy,dz,tmin,tmax) or .bin (8 float32 per ray)")
+      ->required();
+  trace->add_option("-o,--output", hitsPath, "hits: CSV (t,mesh,prim,u,v)");
+  trace->add_option("--threads", threads, "worker threads (0: all cores)");
+  trace->add_option("--stats", statsPath, "write configuration, timings, counters and memory as JSON");
+  flags.add(trace);
 
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
   info->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
@@ -146,7 +328,8 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   try {
-    if (*render) return runRender(scenePath, out, size, threads, statsPath);
+    if (*render) return runRender(scenePath, rf, flags);
+    if (*trace) return runTrace(scenePath, raysPath, hitsPath, threads, statsPath, flags);
     if (*info) return runInfo(scenePath, range);
   } catch (const Error& e) {
     fmt::print(stderr, "oblong: {}\n", e.what());

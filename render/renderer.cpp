@@ -1,69 +1,322 @@
 #include "render/renderer.h"
 
+#include "core/error.h"
 #include "render/camera.h"
 
+#include <OpenImageIO/imageio.h>
+#include <fmt/core.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include <unistd.h>
+
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 
 namespace oblong {
 
-RenderResult renderDirect(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts) {
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// PCG32 (O'Neill 2014), seeded per pixel sample: deterministic whatever the schedule.
+struct Rng {
+  uint64_t state, inc;
+  Rng(uint64_t seed, uint64_t stream) : state(0), inc((stream << 1u) | 1u) {
+    next();
+    state += seed;
+    next();
+  }
+  uint32_t next() {
+    const uint64_t old = state;
+    state = old * 6364136223846793005ULL + inc;
+    const uint32_t x = uint32_t(((old >> 18u) ^ old) >> 27u), rot = uint32_t(old >> 59u);
+    return (x >> rot) | (x << ((-rot) & 31));
+  }
+  float uniform() { return float(next() >> 8) * (1.0f / 16777216.0f); }  // [0,1)
+};
+
+// Orthonormal basis around n (Duff et al. 2017).
+void basis(const vec3& n, vec3& t, vec3& b) {
+  const float s = std::copysign(1.0f, n.z);
+  const float a = -1.0f / (s + n.z), c = n.x * n.y * a;
+  t = vec3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+  b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+vec3 cosineSample(const vec3& n, Rng& rng) {
+  const float u1 = rng.uniform(), u2 = rng.uniform();
+  const float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
+  vec3 t, b;
+  basis(n, t, b);
+  return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0f, 1.0f - u1)) * n);
+}
+
+float spawnEps(const vec3& p) { return 1e-4f * std::max(1.0f, std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)})); }
+
+// Progress bar on stderr, only when it is a terminal; updated by a timer thread.
+class Progress {
+ public:
+  Progress(bool enabled, int64_t total) : total_(total), enabled_(enabled && ::isatty(2)) {
+    if (enabled_) thread_ = std::thread([this] { loop(); });
+  }
+  ~Progress() {
+    if (!enabled_) return;
+    {
+      std::lock_guard<std::mutex> l(m_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+    draw();
+    fmt::print(stderr, "\n");
+  }
+  void add(int64_t n) { done_ += n; }
+
+ private:
+  void loop() {
+    std::unique_lock<std::mutex> l(m_);
+    while (!cv_.wait_for(l, std::chrono::milliseconds(200), [this] { return stop_; })) draw();
+  }
+  void draw() {
+    const double f = total_ > 0 ? double(done_.load()) / double(total_) : 1.0;
+    const int w = 40, k = int(f * w);
+    fmt::print(stderr, "\r  [{}{}] {:5.1f}%", std::string(k, '#'), std::string(w - k, ' '), 100.0 * f);
+    std::fflush(stderr);
+  }
+  int64_t total_;
+  bool enabled_;
+  std::atomic<int64_t> done_{0};
+  std::mutex m_;
+  std::condition_variable cv_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+struct Tracer {
+  const Scene& scene;
+  const EmbreeScene& accel;
+  const RenderOptions& opts;
+  float aoRadius;
+
+  // Direct light from every light at p (normal n facing the incoming ray).
+  vec3 direct(const vec3& p, const vec3& n, const vec3& albedo, RayCounters& c, int64_t& rays) const {
+    vec3 L(0.0f);
+    for (const Light& light : scene.lights) {
+      vec3 wi;
+      float dist = kInfinity, falloff = 1.0f;
+      if (light.type == Light::Type::Directional) {
+        wi = -glm::normalize(light.direction);
+      } else {
+        wi = light.position - p;
+        dist = glm::length(wi);
+        if (!(dist > 0)) continue;
+        wi /= dist;
+        falloff = 1.0f / (dist * dist);
+      }
+      const float cosTheta = glm::dot(n, wi);
+      if (cosTheta <= 0) continue;
+      ++rays;
+      const Ray s{p + spawnEps(p) * n, wi, 0.0f, dist * (1.0f - 1e-4f)};
+      if (!accel.occluded(s, &c)) L += albedo * light.intensity * (cosTheta * falloff / kPi);
+    }
+    return L;
+  }
+
+  // Radiance along a camera ray whose first hit is h.
+  vec3 shade(const Ray& r, const Hit& h, Rng& rng, RayCounters& c, int64_t& rays) const {
+    if (!h.valid()) return opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
+    vec3 n = h.ng;
+    if (glm::dot(n, r.d) > 0) n = -n;
+    if (opts.integrator == Integrator::Primary) return 0.5f * n + 0.5f;
+    const vec3 p = r.at(h.t);
+    if (opts.integrator == Integrator::AO) {
+      ++rays;
+      const Ray a{p + spawnEps(p) * n, cosineSample(n, rng), 0.0f, aoRadius};
+      return vec3(accel.occluded(a, &c) ? 0.0f : 1.0f);
+    }
+    // Path tracing: diffuse surfaces, NEE at every vertex, sky on escape.
+    vec3 L(0.0f), beta(1.0f);
+    vec3 pos = p, nrm = n;
+    int mesh = h.mesh;
+    for (int depth = 0;; ++depth) {
+      const vec3 albedo = scene.meshes[size_t(mesh)].albedo;
+      L += beta * direct(pos, nrm, albedo, c, rays);
+      if (depth + 1 >= opts.maxDepth) break;
+      beta *= albedo;  // cosine-weighted sampling of a Lambertian BRDF
+      if (depth >= 3) {
+        const float q = std::min(0.95f, std::max({beta.x, beta.y, beta.z}));
+        if (rng.uniform() >= q) break;
+        beta /= q;
+      }
+      const Ray b{pos + spawnEps(pos) * nrm, cosineSample(nrm, rng), 0.0f, kInfinity};
+      ++rays;
+      const Hit bh = accel.intersect(b, &c);
+      if (!bh.valid()) {
+        L += beta * opts.sky;
+        break;
+      }
+      nrm = glm::dot(bh.ng, b.d) > 0 ? -bh.ng : bh.ng;
+      pos = b.at(bh.t);
+      mesh = bh.mesh;
+    }
+    return L;
+  }
+};
+
+float sceneDiagonal(const Scene& s) {
+  AABB b;
+  for (const auto& sm : s.meshes)
+    for (const vec3& p : sm.mesh.positions) b.extend(p);
+  return b.isEmpty() ? 1.0f : glm::length(b.extent());
+}
+
+}  // namespace
+
+Integrator parseIntegrator(const std::string& name) {
+  if (name == "primary") return Integrator::Primary;
+  if (name == "ao") return Integrator::AO;
+  if (name == "path") return Integrator::Path;
+  fail("--integrator", "unknown integrator '{}' (primary | ao | path)", name);
+}
+
+const char* integratorName(Integrator i) {
+  switch (i) {
+    case Integrator::Primary: return "primary";
+    case Integrator::AO: return "ao";
+    case Integrator::Path: return "path";
+  }
+  return "?";
+}
+
+RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts) {
+  if (opts.size.x <= 0 || opts.size.y <= 0) fail("render", "image size must be positive");
+  if (opts.spp <= 0) fail("--spp", "must be >= 1, got {}", opts.spp);
   RenderResult res;
-  res.image = Image(opts.size.x, opts.size.y);
-  PinholeCamera cam(scene.camera, opts.size);
-  std::atomic<int64_t> shadow{0}, hits{0};
+  const int W = opts.size.x, H = opts.size.y;
+  const size_t npx = size_t(W) * H;
+  AOVs& aov = res.aov;
+  aov.color = Image(W, H);
+  aov.depth.assign(npx, kInfinity);
+  aov.normal.assign(npx, vec3(0.0f));
+  aov.steps.assign(npx, 0.0f);
+  aov.rangeQueries.assign(npx, 0.0f);
+  aov.inversions.assign(npx, 0.0f);
+  aov.cellsMarched.assign(npx, 0.0f);
+
+  const PinholeCamera cam(scene.camera, opts.size);
+  const Tracer tracer{scene, accel, opts, opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene)};
+  std::atomic<int64_t> secondary{0}, hits{0};
+  std::mutex countersMutex;
   std::unique_ptr<tbb::global_control> limit;
   if (opts.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, opts.threads);
+  Progress progress(opts.progress, int64_t(npx));
   const auto start = std::chrono::steady_clock::now();
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, opts.size.y, 16, 0, opts.size.x, 16), [&](const auto& tile) {
-    int64_t localShadow = 0, localHits = 0;
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, H, 16, 0, W, 16), [&](const auto& tile) {
+    int64_t localRays = 0, localHits = 0;
+    RayCounters tileCounters;
     for (int y = tile.rows().begin(); y < tile.rows().end(); ++y)
       for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
-        const Ray r = cam.generate(x + 0.5f, y + 0.5f);
-        const Hit h = accel.intersect(r);
-        vec3 c(0.05f, 0.06f, 0.08f);  // background
-        if (h.valid()) {
-          ++localHits;
-          vec3 n = h.ng;
-          if (glm::dot(n, r.d) > 0) n = -n;  // shade the side facing the camera
-          const vec3 p = r.at(h.t);
-          const vec3 albedo = scene.meshes[h.mesh].albedo;
-          c = 0.08f * albedo;  // ambient
-          for (const Light& L : scene.lights) {
-            vec3 wi;
-            float dist = kInfinity, falloff = 1.0f;
-            if (L.type == Light::Type::Directional) {
-              wi = -glm::normalize(L.direction);
-            } else {
-              wi = L.position - p;
-              dist = glm::length(wi);
-              wi /= dist;
-              falloff = 1.0f / (dist * dist);
-            }
-            const float cosTheta = glm::dot(n, wi);
-            if (cosTheta <= 0) continue;
-            // Offset scaled to the hit's magnitude: avoids self-hits on the flat micro-triangle.
-            const float eps = 1e-4f * std::max(1.0f, glm::length(p));
-            Ray s{p + eps * n, wi, 0.0f, dist * (1.0f - 1e-4f)};
-            ++localShadow;
-            if (!accel.occluded(s)) c += albedo * L.intensity * (cosTheta * falloff / 3.14159265f);
+        const size_t px = size_t(y) * W + x;
+        vec3 sum(0.0f);
+        RayCounters primary;
+        for (int s = 0; s < opts.spp; ++s) {
+          Rng rng(opts.seed * 0x9E3779B97F4A7C15ULL + px, uint64_t(s));
+          // Sample 0 goes through the pixel centre (AOVs); the others are jittered.
+          const float jx = s == 0 ? 0.5f : rng.uniform(), jy = s == 0 ? 0.5f : rng.uniform();
+          const Ray r = cam.generate(x + jx, y + jy);
+          RayCounters camera;
+          const Hit h = accel.intersect(r, &camera);
+          primary += camera;
+          tileCounters += camera;
+          if (s == 0 && h.valid()) {
+            aov.depth[px] = h.t;
+            aov.normal[px] = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
           }
+          localHits += h.valid();
+          sum += tracer.shade(r, h, rng, tileCounters, localRays);
         }
-        res.image.at(x, y) = c;
+        aov.color.at(x, y) = sum / float(opts.spp);
+        const float inv = 1.0f / float(opts.spp);
+        aov.steps[px] = float(primary.steps()) * inv;
+        aov.rangeQueries[px] = float(primary.rangeQueries) * inv;
+        aov.inversions[px] = float(primary.inversions) * inv;
+        aov.cellsMarched[px] = float(primary.cellsMarched) * inv;
       }
-    shadow += localShadow;
+    {
+      std::lock_guard<std::mutex> lock(countersMutex);
+      res.counters += tileCounters;
+    }
+    secondary += localRays;
     hits += localHits;
+    progress.add(int64_t(tile.rows().size()) * int64_t(tile.cols().size()));
   });
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  res.primaryRays = int64_t(opts.size.x) * opts.size.y;
-  res.shadowRays = shadow;
+  res.primaryRays = int64_t(npx) * opts.spp;
+  res.secondaryRays = secondary;
   res.hits = hits;
   return res;
+}
+
+void writeAOVs(const AOVs& aov, const std::string& path) {
+  const int W = aov.color.width, H = aov.color.height;
+  const size_t npx = size_t(W) * H;
+  const char* names[] = {"R", "G", "B", "Z", "N.X", "N.Y", "N.Z", "steps", "range_queries", "inversions", "cells_marched"};
+  constexpr int C = 11;
+  std::vector<float> px(npx * C);
+  for (size_t i = 0; i < npx; ++i) {
+    float* o = &px[i * C];
+    const vec3& c = aov.color.pixels[i];
+    o[0] = c.x, o[1] = c.y, o[2] = c.z;
+    o[3] = aov.depth[i];
+    o[4] = aov.normal[i].x, o[5] = aov.normal[i].y, o[6] = aov.normal[i].z;
+    o[7] = aov.steps[i], o[8] = aov.rangeQueries[i], o[9] = aov.inversions[i], o[10] = aov.cellsMarched[i];
+  }
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) fail(path, "cannot write AOVs ({})", OIIO::geterror());
+  OIIO::ImageSpec spec(W, H, C, OIIO::TypeDesc::FLOAT);
+  spec.channelnames.assign(std::begin(names), std::end(names));
+  spec.z_channel = 3;
+  if (!out->open(path, spec)) fail(path, "cannot write AOVs ({})", out->geterror());
+  if (!out->write_image(OIIO::TypeDesc::FLOAT, px.data()) || !out->close())
+    fail(path, "cannot write AOVs ({})", out->geterror());
+}
+
+namespace {
+// A compact perceptual colour map (viridis-like, 5 stops, linear in between).
+vec3 colormap(float t) {
+  static const vec3 stops[] = {{0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.546f}, {0.128f, 0.567f, 0.551f},
+                               {0.369f, 0.789f, 0.383f}, {0.993f, 0.906f, 0.144f}};
+  t = std::clamp(t, 0.0f, 1.0f) * 4.0f;
+  const int i = std::min(3, int(t));
+  return glm::mix(stops[i], stops[i + 1], t - float(i));
+}
+}  // namespace
+
+void writeHeatMap(const AOVs& aov, const std::string& path, float maxSteps) {
+  const int W = aov.color.width, H = aov.color.height;
+  float mx = maxSteps;
+  if (mx <= 0)
+    for (float s : aov.steps) mx = std::max(mx, s);
+  mx = std::max(mx, 1.0f);
+  const int bar = std::max(4, H / 40);  // colour bar at the bottom, log scale 1 .. mx
+  Image img(W, H + bar);
+  const float denom = std::log1p(mx);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const float s = aov.steps[size_t(y) * W + x];
+      // Linear values: writeImage sRGB-encodes PNGs, so undo that for the colour map.
+      const vec3 c = s <= 0 ? vec3(0.0f) : colormap(std::log1p(s) / denom);
+      img.at(x, y) = glm::pow(c, vec3(2.2f));
+    }
+  for (int y = H; y < H + bar; ++y)
+    for (int x = 0; x < W; ++x) img.at(x, y) = glm::pow(colormap(float(x) / float(std::max(1, W - 1))), vec3(2.2f));
+  writeImage(img, path);
 }
 
 }  // namespace oblong

@@ -1,24 +1,64 @@
-// A small direct-lighting renderer over an EmbreeScene: one primary ray per pixel
-// sample, Lambert shading with shadow rays to the scene's lights, multi-threaded over
-// image tiles with TBB. Deterministic: the result does not depend on the thread count.
+// The renderer over an EmbreeScene: three integrators, per-pixel AOVs, multi-threaded
+// over 16x16 image tiles with TBB, deterministic for a given seed whatever the thread
+// count (each pixel sample draws from its own hashed random stream).
+//
+//   primary  the shading normal of the first hit (0.5·n + 0.5), no secondary rays
+//   ao       ambient occlusion: one cosine-weighted ray per sample, radius aoRadius
+//   path     a small diffuse path tracer with next-event estimation towards the scene's
+//            point and directional lights, a constant sky, Russian roulette after depth 3
+//
+// Shading normals are the geometric normals of the hit micro-triangles (the
+// micro-geometry is flat, DESIGN §1); secondary rays start at p + ε·n on the side the
+// ray came from, ε = 1e-4·max(1, |p|) (DESIGN invariant 5).
 #pragma once
 
 #include "render/embree_scene.h"
 #include "render/image.h"
 
+#include <cstdint>
+#include <string>
+#include <vector>
+
 namespace oblong {
+
+enum class Integrator { Primary, AO, Path };
+Integrator parseIntegrator(const std::string& name);  // throws oblong::Error
+const char* integratorName(Integrator i);
 
 struct RenderOptions {
   ivec2 size{640, 480};
+  int spp = 1;
   int threads = 0;  // 0: all cores
+  Integrator integrator = Integrator::Path;
+  uint64_t seed = 0;
+  int maxDepth = 5;          // path: bounces
+  float aoRadius = 0.0f;     // ao: 0 = a quarter of the scene's bounding-box diagonal
+  vec3 sky{0.12f, 0.14f, 0.18f};  // path: radiance of rays that leave the scene
+  bool progress = true;      // progress bar on stderr when it is a terminal
+};
+
+// Per-pixel outputs. Counters are the camera rays' traversal work, averaged over the
+// pixel's samples (the RMIP paper's Fig. 9 heat maps are of primary rays).
+struct AOVs {
+  Image color{1, 1};
+  std::vector<float> depth;   // t of the first hit (inf: miss), first sample
+  std::vector<vec3> normal;   // shading normal of the first hit, first sample (0: miss)
+  std::vector<float> steps, rangeQueries, inversions, cellsMarched;
 };
 
 struct RenderResult {
-  Image image{1, 1};
+  AOVs aov;
   double seconds = 0;
-  int64_t primaryRays = 0, shadowRays = 0, hits = 0;
+  int64_t primaryRays = 0, secondaryRays = 0, hits = 0;
+  RayCounters counters;  // traversal work of all rays (camera and secondary)
 };
 
-RenderResult renderDirect(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts);
+RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts);
+
+// Colour, depth, normal and the per-pixel counters as one multi-channel EXR.
+void writeAOVs(const AOVs& aov, const std::string& path);
+// False-colour, log-scale heat map of steps per pixel (RMIP paper Fig. 9), with a
+// colour bar; maxSteps <= 0: the image's own maximum.
+void writeHeatMap(const AOVs& aov, const std::string& path, float maxSteps = 0.0f);
 
 }  // namespace oblong

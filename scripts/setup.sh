@@ -12,7 +12,7 @@ PKGS=(
   libglm-dev libembree-dev libopenimageio-dev openimageio-tools libceres-dev
   catch2 libfmt-dev libassimp-dev nlohmann-json3-dev libcli11-dev libtbb-dev
   libbenchmark-dev
-  glmark2-data python3-matplotlib python3-numpy
+  glmark2-data python3-matplotlib python-matplotlib-data python3-numpy
   clang libclang-rt-14-dev
 )
 
@@ -28,3 +28,18 @@ fi
 # Debian's OpenImageIO CMake config lists /usr/include/opencv4 as an include
 # directory; CMake's generate step fails when it does not exist.
 $SUDO mkdir -p /usr/include/opencv4
+
+# Scene data converted at set-up time (scenes/README.md): the Jacksboro fault DEM from
+# python-matplotlib-data -> scenes/data/jacksboro_fault_dem.png (git-ignored) for
+# scenes/terrain.json. Debian's /usr/bin/python3 has numpy; a `python3` found earlier
+# on PATH may be another interpreter without it.
+ROOT="$(cd "$(dirname "$0")/.." && pwd)"
+DEM="$(dpkg -L python-matplotlib-data | grep '/jacksboro_fault_dem\.npz$' | head -n 1)"
+TERRAIN="$ROOT/scenes/data/jacksboro_fault_dem.png"
+if [ -z "$DEM" ]; then
+  echo "setup.sh: jacksboro_fault_dem.npz not found in python-matplotlib-data" >&2
+  exit 1
+fi
+if [ ! -s "$TERRAIN" ] || [ "$TERRAIN" -ot "$ROOT/scenes/tools/make_terrain.py" ] || [ "$TERRAIN" -ot "$DEM" ]; then
+  /usr/bin/python3 "$ROOT/scenes/tools/make_terrain.py" "$DEM" "$TERRAIN"
+fi

@@ -1,5 +1,6 @@
 // Drives the oblong binary as a user would: good runs produce files, bad input gives
 // one error line naming the file and a non-zero exit.
+#include "render/rays_io.h"
 #include "test_util.h"
 
 #include <catch2/catch.hpp>
@@ -81,6 +82,107 @@ TEST_CASE("bad command-line input gives one clear error line", "[cli][bad_input]
   };
   for (const auto& c : cases) {
     const Run r = run(c.args);
+    INFO(c.args << "\nstdout: " << r.out << "\nstderr: " << r.err);
+    CHECK(r.status == 1);
+    CHECK(lines(r.err) == 1);
+    CHECK(r.err.find(c.mustContain) != std::string::npos);
+  }
+}
+
+namespace {
+
+std::vector<oblong::Ray> someRays(int n) {
+  // Camera-like rays at the default scene (torus at the origin, ground at y = -0.6).
+  std::vector<oblong::Ray> rays;
+  for (int i = 0; i < n; ++i) {
+    const float a = 6.2831853f * float(i) / float(n);
+    const oblong::vec3 o(3.0f * std::cos(a), 1.5f, 3.0f * std::sin(a));
+    const oblong::vec3 target(0.8f * std::cos(3.0f * a), -0.2f + 0.3f * std::sin(5.0f * a), 0.8f * std::sin(2.0f * a));
+    rays.push_back(oblong::Ray{o, glm::normalize(target - o), 0.0f, oblong::kInfinity});
+  }
+  return rays;
+}
+
+}  // namespace
+
+TEST_CASE("oblong trace writes the first hit of every ray, CSV and binary alike", "[cli][trace]") {
+  const auto dir = oblong::test::scratchDir("cli_trace");
+  const auto rays = someRays(400);
+  const std::string csv = (dir / "rays.csv").string(), bin = (dir / "rays.bin").string();
+  oblong::writeRays(csv, rays);
+  oblong::writeRays(bin, rays);
+  const std::string h1 = (dir / "h1.csv").string(), h2 = (dir / "h2.csv").string(),
+                    h3 = (dir / "h3.csv").string(), stats = (dir / "trace.json").string();
+  Run r = run("trace --rays " + csv + " -o " + h1 + " --stats " + stats);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  r = run("trace --rays " + bin + " -o " + h2);
+  REQUIRE(r.status == 0);
+  r = run("trace --rays " + csv + " -o " + h3 + " --baseline tessellated");
+  REQUIRE(r.status == 0);
+  const auto a = oblong::readHits(h1), b = oblong::readHits(h2), c = oblong::readHits(h3);
+  REQUIRE(a.size() == rays.size());
+  REQUIRE(b.size() == rays.size());
+  REQUIRE(c.size() == rays.size());
+  size_t hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    INFO("ray " << i);
+    CHECK(a[i].valid() == b[i].valid());
+    CHECK(a[i].t == b[i].t);  // same rays, same traversal: bit-identical
+    REQUIRE(a[i].valid() == c[i].valid());
+    if (!a[i].valid()) continue;
+    ++hits;
+    CHECK(a[i].mesh == c[i].mesh);
+    CHECK(std::abs(a[i].t - c[i].t) <= 1e-5f * std::max(1.0f, a[i].t));
+    // Modulo 1: a ray in the plane z = 0 hits the torus on its uv seam (u = 0 = 1),
+    // where either side's triangle is the first hit.
+    auto wrapped = [](float d) { return std::abs(d - std::round(d)); };
+    CHECK(wrapped(a[i].uv.x - c[i].uv.x) < 1e-3f);
+    CHECK(wrapped(a[i].uv.y - c[i].uv.y) < 1e-3f);
+  }
+  CHECK(hits > rays.size() / 2);
+  std::ifstream f(stats);
+  const auto j = nlohmann::json::parse(f);
+  CHECK(j.at("rays").at("count") == rays.size());
+  CHECK(j.at("config").at("range").at("name") == "rmip");
+  CHECK(j.at("ray_counters").at("steps").get<int64_t>() > 0);
+  CHECK(j.at("memory_total").get<int64_t>() > 0);
+}
+
+TEST_CASE("oblong trace: bad ray files and flags give one clear error line", "[cli][trace][bad_input]") {
+  const auto dir = oblong::test::scratchDir("cli_trace_bad");
+  auto write = [&](const std::string& name, const std::string& text) {
+    const std::string p = (dir / name).string();
+    std::ofstream(p) << text;
+    return p;
+  };
+  const std::string header = "ox,oy,oz,dx,dy,dz,tmin,tmax\n";
+  const std::string noHeader = write("noheader.csv", "0,0,5,0,0,-1,0,inf\n");
+  const std::string fields = write("fields.csv", header + "0,0,5,0,0,-1,0\n");
+  const std::string word = write("word.csv", header + "0,0,five,0,0,-1,0,inf\n");
+  const std::string nan = write("nan.csv", header + "0,0,5,0,0,nan,0,inf\n");
+  const std::string zero = write("zero.csv", header + "0,0,5,0,0,0,0,inf\n");
+  const std::string bin = write("odd.bin", "0123456789");
+  const std::string good = write("good.csv", header + "0,0,5,0,0,-1,0,inf\n");
+  struct Case {
+    std::string args, mustContain;
+  };
+  const Case cases[] = {
+      {"trace --rays /nonexistent/rays.csv", "/nonexistent/rays.csv"},
+      {"trace --rays " + noHeader, "header"},
+      {"trace --rays " + fields, "line 2"},
+      {"trace --rays " + word, "five"},
+      {"trace --rays " + nan, "NaN"},
+      {"trace --rays " + zero, "zero"},
+      {"trace --rays " + bin, "multiple of 32"},
+      {"trace --rays " + good + " --range nosuch", "nosuch"},
+      {"trace --rays " + good + " --splitter nosuch", "nosuch"},
+      {"trace --rays " + good + " --inverter nosuch", "nosuch"},
+      {"trace --rays " + good + " --marching-scale -1", "--marching-scale"},
+      {"trace --rays " + good + " --step 0.1", "--step"},
+  };
+  for (const auto& c : cases) {
+    const Run r = run(c.args + " -o " + (dir / "hits.csv").string());
     INFO(c.args << "\nstdout: " << r.out << "\nstderr: " << r.err);
     CHECK(r.status == 1);
     CHECK(lines(r.err) == 1);

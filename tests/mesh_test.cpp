@@ -1,5 +1,6 @@
 #include "core/error.h"
 #include "core/mesh.h"
+#include "core/procedural.h"
 #include "test_util.h"
 
 #include <catch2/catch.hpp>
@@ -180,6 +181,19 @@ TEST_CASE("bad meshes give one-line errors naming the file", "[mesh]") {
     const auto path = writeFile("garbage.ply", "this is not a mesh\n\x01\x02\x03");
     CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": cannot load mesh"));
   }
+  SECTION("PLY header without end_header: an error, not assimp's endless loop") {
+    for (const std::string text : {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n",
+                                   "PLY\nformat ascii 1.0\nend_headerX\n", "\r\nply\ncomment end_header\n"}) {
+      const auto path = writeFile("noend.ply", text);
+      CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": cannot load mesh (PLY header without an end_header"));
+    }
+    // A well-formed header (CRLF, indented end_header) still loads.
+    const auto ok = writeFile("crlf.ply",
+                              "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
+                              "property float z\r\nelement face 1\r\nproperty list uchar int vertex_indices\r\n"
+                              "  end_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2\r\n");
+    CHECK(loadMesh(ok).triangles.size() == 1);
+  }
   SECTION("no triangles (lines only)") {
     const auto path = writeFile("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n");
     CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": ") && Contains("no triangles"));
@@ -230,4 +244,118 @@ TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map; high: the re
   CHECK(h.triangles.size() == 48000);
   CHECK(h.positions.size() == 24002);
   CHECK_FALSE(h.hasUVs());
+}
+
+TEST_CASE("degenerate triangles are skipped with a warning, not an error", "[mesh][bad_input]") {
+  // Triangle 1 repeats a vertex, triangle 2 has three collinear vertices, triangle 3 has
+  // a zero-area uv triangle (all uvs equal): skipped only when the mesh is displaced.
+  const auto path = writeFile("degenerate.obj",
+                              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 1 1 0\n"
+                              "vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\n"
+                              "f 1/1 2/2 3/3\nf 1/1 2/2 2/2\nf 1/1 2/2 4/1\nf 2/4 4/4 5/4\n");
+  const Mesh plain = loadMesh(path, {glm::mat4(1.0f), false, false});
+  CHECK(plain.triangles.size() == 2);  // triangles 0 and 3
+  CHECK(plain.skippedTriangles == 2);
+  const Mesh displaced = loadMesh(path, {glm::mat4(1.0f), true, false});
+  CHECK(displaced.triangles.size() == 1);
+  CHECK(displaced.skippedTriangles == 3);
+  for (size_t i = 0; i < displaced.triangles.size(); ++i) CHECK(displaced.triangle(i).prepare());
+  // The vertex used only by degenerate triangles (x = 2) still gets a unit normal.
+  for (const vec3& n : displaced.normals) CHECK(glm::length(n) == Approx(1.0f));
+}
+
+TEST_CASE("a mesh whose triangles are all degenerate is an error", "[mesh][bad_input]") {
+  const auto path = writeFile("alldegenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n");
+  CHECK_THROWS_MATCHES(loadMesh(path, {glm::mat4(1.0f), false, false}), Error,
+                       Catch::Matchers::Message(path + ": all 2 triangles are degenerate (zero area: 2)"));
+  // Zero uv area everywhere: fine undisplaced, an error displaced.
+  const auto flatUV = writeFile("flatuv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nvt 2 2\nf 1/1 2/2 3/3\n");
+  CHECK(loadMesh(flatUV).triangles.size() == 1);
+  CHECK_THROWS_WITH(loadMesh(flatUV, {glm::mat4(1.0f), true, false}),
+                    Contains(flatUV + ": all 1 triangles are degenerate (zero area: 0, zero uv area: 1)"));
+  // A transform so small that every area underflows to zero.
+  const auto tiny = writeFile("tiny.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  CHECK_THROWS_WITH(loadMesh(tiny, {glm::scale(glm::mat4(1.0f), vec3(1e-25f, 1, 1)), false, false}),
+                    Contains(tiny + ": all 1 triangles are degenerate (zero area: 1)"));
+}
+
+TEST_CASE("normals that cancel inside a displaced triangle are an error", "[mesh][bad_input]") {
+  // Opposite vertex normals: N(b) vanishes on the edge between them, so N/|N| (the
+  // displacement direction) is undefined. Fine for a plain mesh.
+  const auto path = writeFile("cancelinside.obj",
+                              "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nvn 0 0 -1\n"
+                              "f 1/1/1 2/2/2 3/3/1\n");
+  CHECK_NOTHROW(loadMesh(path));
+  CHECK_THROWS_WITH(loadMesh(path, {glm::mat4(1.0f), true, false}),
+                    Contains(path + ": triangle 0: its vertex normals cancel"));
+}
+
+TEST_CASE("coordinates whose triangle areas overflow are an error", "[mesh][bad_input]") {
+  const auto path = writeFile("huge.obj", "v 0 0 0\nv 3e38 0 0\nv 0 3e38 0\nf 1 2 3\n");
+  CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": triangle 0: its area overflows"));
+}
+
+TEST_CASE("finishMesh checks generated meshes like loaded ones", "[mesh][bad_input]") {
+  Mesh m;
+  m.name = "<test>";
+  CHECK_THROWS_WITH(finishMesh(m, {}), Contains("<test>: mesh has no triangles"));
+  m.positions = {vec3(0), vec3(1, 0, 0), vec3(0, 1, 0)};
+  m.normals = {vec3(0), vec3(0), vec3(0)};
+  m.triangles = {{0, 1, 5}};
+  CHECK_THROWS_WITH(finishMesh(m, {}), Contains("triangle uses vertex 5 of 3"));
+  m.triangles = {{0, 1, 2}};
+  CHECK_THROWS_WITH(finishMesh(m, {glm::mat4(1.0f), true, false}), Contains("no texture coordinates"));
+  finishMesh(m, {});
+  for (const vec3& n : m.normals) CHECK(n == vec3(0, 0, 1));  // smooth normals filled in
+}
+
+TEST_CASE("procedural plane and sphere: outward normals, seams bit-identical, nothing degenerate", "[mesh]") {
+  const Mesh plane = planeMesh(vec2(3, 2), ivec2(3, 4), vec2(0.1f, 0.2f), vec2(0.9f, 0.7f));
+  CHECK(plane.triangles.size() == 24);
+  for (size_t i = 0; i < plane.triangles.size(); ++i) {
+    DisplacedTriangle T = plane.triangle(i);
+    REQUIRE(T.prepare());
+    CHECK(T.faceNormal == vec3(0, 1, 0));
+    CHECK(T.uvArea2 != 0.0f);
+  }
+  // Corners: exact positions and uvs.
+  CHECK(plane.positions.front() == vec3(-1.5f, 0, -1));
+  CHECK(plane.positions.back() == vec3(1.5f, 0, 1));
+  CHECK(plane.uvs.front() == vec2(0.1f, 0.2f));
+  CHECK(plane.uvs.back() == vec2(0.9f, 0.7f));
+
+  for (const ivec2 seg : {ivec2(3, 2), ivec2(64, 32), ivec2(7, 5)}) {
+    const Mesh s = sphereMesh(1.5f, seg.x, seg.y);
+    INFO(seg.x << "x" << seg.y);
+    CHECK(s.triangles.size() == size_t(2 * seg.x * (seg.y - 1)));
+    double area = 0;
+    for (size_t i = 0; i < s.triangles.size(); ++i) {
+      DisplacedTriangle T = s.triangle(i);
+      REQUIRE(T.prepare());
+      area += T.area;
+      // Outward: the geometric normal agrees with the vertex normals and points away
+      // from the centre; uv triangles keep one orientation (no mirrored charts).
+      for (int k = 0; k < 3; ++k) CHECK(glm::dot(T.faceNormal, T.n[k]) > 0.0f);
+      CHECK(glm::dot(T.faceNormal, (T.p[0] + T.p[1] + T.p[2]) / 3.0f) > 0.0f);
+      CHECK(T.uvArea2 < 0.0f);  // same sign for every triangle
+    }
+    if (seg.x == 64) CHECK(area == Approx(4 * 3.14159265 * 1.5 * 1.5).epsilon(0.01));
+    // Same position => bit-identical normal (watertight displacement needs it).
+    std::map<std::tuple<float, float, float>, vec3> byPosition;
+    for (size_t v = 0; v < s.positions.size(); ++v) {
+      CHECK(glm::length(s.normals[v]) == Approx(1.0f).epsilon(1e-6));
+      const vec3 p = s.positions[v];
+      auto [it, fresh] = byPosition.try_emplace({p.x, p.y, p.z}, s.normals[v]);
+      if (!fresh) CHECK(it->second == s.normals[v]);
+    }
+    // Distinct positions: (nv-1) rings of nu, and the two poles.
+    CHECK(byPosition.size() == size_t(seg.x * (seg.y - 1) + 2));
+  }
+  // Seen from outside at +x (u = 0), u increases to the right (towards -z) and v
+  // downwards: the map is not mirrored.
+  const Mesh s = sphereMesh(1.0f, 8, 4);
+  for (size_t v = 0; v < s.positions.size(); ++v) {
+    if (s.uvs[v] == vec2(0.125f, 0.5f)) CHECK(s.positions[v].z < 0.0f);
+    if (s.uvs[v] == vec2(0.0f, 0.25f)) CHECK(s.positions[v].y > 0.0f);
+  }
 }

@@ -1,5 +1,6 @@
 #include "core/error.h"
 #include "core/scene.h"
+#include "core/triangle.h"
 #include "test_util.h"
 
 #include <catch2/catch.hpp>
@@ -7,6 +8,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 
 using namespace oblong;
 using Catch::Matchers::Contains;
@@ -45,7 +48,9 @@ const char* kValid = R"({
     {"file": "../quad.obj", "displacement": {"map": "../map.png"}},
     {"file": "../nouv.obj"}
   ],
-  "strategies": {"range": {"name": "rmip", "resolution": 64, "lod": false}}
+  "strategies": {"range": {"name": "rmip", "resolution": 64, "lod": false},
+                 "inverter": {"name": "cubic"}, "splitter": {"name": "midpoint3d", "depth": 3},
+                 "marching_scale": 2.5, "inversion_in_traversal": false}
 })";
 
 bool near(const vec3& a, const vec3& b) { return glm::length(a - b) < 1e-5f; }
@@ -110,6 +115,14 @@ TEST_CASE("a valid scene round trip", "[scene]") {
   CHECK(s.range.name == "rmip");
   CHECK(s.range.params == nlohmann::json({{"resolution", 64}, {"lod", false}}));
   CHECK(s.range.where == path + ": strategies.range");
+  CHECK(s.inverter.name == "cubic");
+  CHECK(s.inverter.params.empty());
+  CHECK(s.inverter.where == path + ": strategies.inverter");
+  CHECK(s.splitter.name == "midpoint3d");
+  CHECK(s.splitter.params == nlohmann::json({{"depth", 3}}));
+  CHECK(s.splitter.where == path + ": strategies.splitter");
+  CHECK(s.marchingScale == 2.5f);
+  CHECK_FALSE(s.inversionInTraversal);
 }
 
 TEST_CASE("a map used by several meshes is loaded once", "[scene]") {
@@ -130,8 +143,51 @@ TEST_CASE("defaults: a scene with only a mesh", "[scene]") {
   CHECK(s.lights.empty());
   CHECK(s.range.name == "rmip");
   CHECK(s.range.params.empty());
+  CHECK(s.inverter.name == "newton");
+  CHECK(s.inverter.params.empty());
+  CHECK(s.splitter.name == "midpoint2d");
+  CHECK(s.splitter.params.empty());
+  CHECK(s.marchingScale == 4.0f);
+  CHECK(s.inversionInTraversal);
   REQUIRE(s.meshes.size() == 1);
   CHECK_FALSE(s.meshes[0].displacement);
+  // Only some strategy keys: the others keep their defaults.
+  const Scene t = loadScene(writeScene(dir / "partial.json",
+                                       R"({"meshes": [{"file": "quad.obj"}], "strategies": {"marching_scale": 8}})"));
+  CHECK(t.marchingScale == 8.0f);
+  CHECK(t.range.name == "rmip");
+  CHECK(t.inverter.name == "newton");
+  CHECK(t.splitter.name == "midpoint2d");
+}
+
+TEST_CASE("procedural shapes stand in for mesh files", "[scene]") {
+  const fs::path dir = sceneDir();
+  const Scene s = loadScene(writeScene(dir / "shapes.json", R"({"meshes": [
+    {"shape": {"type": "plane", "size": [4, 2], "segments": [3, 2], "uv": [0.25, 0, 0.75, 2]},
+     "displacement": {"map": "map.png"}},
+    {"shape": {"type": "sphere", "radius": 2, "segments": [8, 4]}, "transform": {"translate": [0, 5, 0]}},
+    {"shape": {"type": "torus", "major_radius": 1.5, "minor_radius": 0.5, "segments": 6}},
+    {"shape": {"type": "plane"}}
+  ]})"));
+  REQUIRE(s.meshes.size() == 4);
+  const Mesh& plane = s.meshes[0].mesh;
+  CHECK(plane.name == "<procedural plane>");
+  CHECK(plane.triangles.size() == 2 * 3 * 2);
+  AABB box;
+  for (const vec3& p : plane.positions) box.extend(p);
+  CHECK(box.lo == vec3(-2, 0, -1));
+  CHECK(box.hi == vec3(2, 0, 1));
+  vec2 uvLo(kInfinity), uvHi(-kInfinity);
+  for (const vec2& t : plane.uvs) uvLo = glm::min(uvLo, t), uvHi = glm::max(uvHi, t);
+  CHECK(uvLo == vec2(0.25f, 0.0f));
+  CHECK(uvHi == vec2(0.75f, 2.0f));
+  CHECK(s.meshes[0].displacement);
+
+  const Mesh& sphere = s.meshes[1].mesh;
+  CHECK(sphere.triangles.size() == 2 * 8 * 3);
+  for (const vec3& p : sphere.positions) CHECK(glm::length(p - vec3(0, 5, 0)) == Approx(2.0f).epsilon(1e-6));
+  CHECK(s.meshes[2].mesh.triangles.size() == 2 * 6 * 6);
+  CHECK(s.meshes[3].mesh.triangles.size() == 2);
 }
 
 TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
@@ -158,8 +214,49 @@ TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
       {"point-light key on a directional light",
        "{" + mesh + R"(, "lights": [{"type": "directional", "direction": [0,-1,0], "position": [0,0,0]}]})",
        {"unknown key 'lights[0].position'"}},
-      {"unknown strategy slot", "{" + mesh + R"(, "strategies": {"inverter": {"name": "newton"}}})",
-       {"unknown key 'strategies.inverter'"}},
+      {"unknown strategy slot", "{" + mesh + R"(, "strategies": {"integrator": {"name": "path"}}})",
+       {"unknown key 'strategies.integrator'"}},
+      {"inverter without name", "{" + mesh + R"(, "strategies": {"inverter": {"iterations": 4}}})",
+       {"strategies.inverter.name", "missing"}},
+      {"splitter not an object", "{" + mesh + R"(, "strategies": {"splitter": "midpoint2d"}})",
+       {"strategies.splitter", "must be an object"}},
+      {"zero marching scale", "{" + mesh + R"(, "strategies": {"marching_scale": 0}})",
+       {"strategies.marching_scale", "positive"}},
+      {"negative marching scale", "{" + mesh + R"(, "strategies": {"marching_scale": -2}})",
+       {"strategies.marching_scale", "positive"}},
+      {"marching scale as a string", "{" + mesh + R"(, "strategies": {"marching_scale": "4"}})",
+       {"strategies.marching_scale", "must be a number"}},
+      {"inversion flag not a bool", "{" + mesh + R"(, "strategies": {"inversion_in_traversal": 1}})",
+       {"strategies.inversion_in_traversal", "true or false"}},
+      {"image too large", "{" + mesh + R"(, "image": {"width": 1048576, "height": 1048576}})",
+       {"image", "2^26"}},
+      {"file and shape", R"({"meshes": [{"file": "quad.obj", "shape": {"type": "plane"}}]})",
+       {"meshes[0]", "either 'file' or 'shape'"}},
+      {"shape without type", R"({"meshes": [{"shape": {"size": 2}}]})", {"meshes[0].shape.type", "missing"}},
+      {"unknown shape", R"({"meshes": [{"shape": {"type": "cube"}}]})", {"meshes[0].shape.type", "cube"}},
+      {"sphere key on a plane", R"({"meshes": [{"shape": {"type": "plane", "radius": 2}}]})",
+       {"unknown key 'meshes[0].shape.radius'", "plane takes size, segments, uv"}},
+      {"negative plane size", R"({"meshes": [{"shape": {"type": "plane", "size": [2, -1]}}]})",
+       {"meshes[0].shape.size", "positive"}},
+      {"zero sphere radius", R"({"meshes": [{"shape": {"type": "sphere", "radius": 0}}]})",
+       {"meshes[0].shape.radius", "positive"}},
+      {"too few sphere segments", R"({"meshes": [{"shape": {"type": "sphere", "segments": [2, 8]}}]})",
+       {"meshes[0].shape.segments", "at least [3, 2]"}},
+      {"fractional segments", R"({"meshes": [{"shape": {"type": "plane", "segments": 2.5}}]})",
+       {"meshes[0].shape.segments", "positive integer"}},
+      {"huge segments", R"({"meshes": [{"shape": {"type": "plane", "segments": [16384, 16384]}}]})",
+       {"meshes[0].shape.segments", "more than the supported"}},
+      {"segments beyond int64", R"({"meshes": [{"shape": {"type": "plane", "segments": 18446744073709551615}}]})",
+       {"meshes[0].shape.segments", "positive integer"}},
+      {"torus radii swapped", R"({"meshes": [{"shape": {"type": "torus", "major_radius": 0.2, "minor_radius": 1}}]})",
+       {"meshes[0].shape", "minor_radius < major_radius"}},
+      {"inverted plane uv range", R"({"meshes": [{"shape": {"type": "plane", "uv": [1, 0, 0, 1]}}]})",
+       {"meshes[0].shape.uv", "u0 < u1"}},
+      {"negative tiling", disp + R"("tiling": -2}}]})", {"meshes[0].displacement.tiling", "positive"}},
+      {"tiling overflowing the sample grid", disp + R"("tiling": 1e30}}]})",
+       {"meshes[0].displacement.tiling", "2^30"}},
+      {"heights overflowing a float", disp + R"("scale": 3e38, "bias": 2}}]})",
+       {"meshes[0].displacement.scale", "overflow"}},
       {"zero image width", "{" + mesh + R"(, "image": {"width": 0}})", {"image.width", "positive integer"}},
       {"negative image height", "{" + mesh + R"(, "image": {"height": -4}})", {"image.height", "positive integer"}},
       {"fractional image width", "{" + mesh + R"(, "image": {"width": 64.5}})", {"image.width"}},
@@ -187,7 +284,7 @@ TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
        {"lights[0].position", "missing"}},
       {"no meshes", R"({"camera": {}})", {"meshes", "missing"}},
       {"empty meshes", R"({"meshes": []})", {"meshes", "empty"}},
-      {"mesh without file", R"({"meshes": [{"albedo": [1,1,1]}]})", {"meshes[0].file", "missing"}},
+      {"mesh without file", R"({"meshes": [{"albedo": [1,1,1]}]})", {"meshes[0].file", "missing", "'shape'"}},
       {"mesh file not a string", R"({"meshes": [{"file": 3}]})", {"meshes[0].file", "string"}},
       {"mesh file missing", R"({"meshes": [{"file": "nope.obj"}]})",
        {"meshes[0].file", (dir / "nope.obj").string() + ": file not found"}},
@@ -253,11 +350,68 @@ TEST_CASE("missing scene file and non-finite numbers built in code", "[scene]") 
   CHECK_THROWS_WITH(parseScene(j, where), Contains(where + ": camera.from[1]"));
 }
 
-TEST_CASE("the scenes shipped in scenes/ parse", "[scene]") {
-  for (const char* name : {"asteroid.json", "asteroid_high.json"}) {
+TEST_CASE("every scene shipped in scenes/ loads with its meshes and maps", "[scene]") {
+  // What each scene must contain: meshes (displaced or not), triangles, map sizes.
+  struct Expect {
+    std::vector<size_t> triangles;
+    std::vector<ivec2> maps;  // one per mesh; (0,0) = not displaced
+  };
+  const std::map<std::string, Expect> expected = {
+      {"asteroid.json", {{480}, {{1024, 1024}}}},
+      {"asteroid_high.json", {{48000}, {{0, 0}}}},
+      {"quad_tiled.json", {{2}, {{256, 256}}}},
+      {"sphere.json", {{3968}, {{512, 256}}}},
+      {"terrain.json", {{2 * 40 * 34}, {{403, 344}}}},
+      {"mixed.json", {{480, 48000, 2}, {{1024, 1024}, {0, 0}, {0, 0}}}},
+  };
+  std::set<std::string> seen;
+  for (const auto& entry : fs::directory_iterator(fs::path(OBLONG_SOURCE_DIR) / "scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    const std::string name = entry.path().filename().string();
     INFO(name);
-    const Scene s = loadScene(std::string(OBLONG_SOURCE_DIR) + "/scenes/" + name);
-    CHECK(s.meshes.size() == 1);
-    CHECK(s.lights.size() == 1);
+    seen.insert(name);
+    if (name == "terrain.json" && !fs::exists(fs::path(OBLONG_SOURCE_DIR) / "scenes/data/jacksboro_fault_dem.png"))
+      FAIL("scenes/data/jacksboro_fault_dem.png is missing: run scripts/setup.sh (it converts the DEM)");
+    Scene s;
+    REQUIRE_NOTHROW(s = loadScene(entry.path().string()));
+    CHECK(!s.lights.empty());
+    for (const SceneMesh& sm : s.meshes) {
+      CHECK(sm.mesh.skippedTriangles == 0);
+      if (sm.displacement) {
+        REQUIRE(sm.displacement->map);
+        CHECK(sm.mesh.hasUVs());
+        size_t displaceable = 0;
+        for (size_t i = 0; i < sm.mesh.triangles.size(); ++i) displaceable += sm.mesh.triangle(i).prepare();
+        CHECK(displaceable == sm.mesh.triangles.size());
+      }
+    }
+    const auto it = expected.find(name);
+    if (it == expected.end()) continue;  // a new scene: loading it is the test
+    REQUIRE(s.meshes.size() == it->second.triangles.size());
+    for (size_t i = 0; i < s.meshes.size(); ++i) {
+      INFO("mesh " << i);
+      CHECK(s.meshes[i].mesh.triangles.size() == it->second.triangles[i]);
+      const ivec2 m = s.meshes[i].displacement
+                          ? ivec2(s.meshes[i].displacement->map->width(), s.meshes[i].displacement->map->height())
+                          : ivec2(0);
+      CHECK(m == it->second.maps[i]);
+    }
+  }
+  for (const auto& [name, e] : expected) CHECK(seen.count(name));
+}
+
+TEST_CASE("the sphere scene's map is zero on the polar caps (no cracks at the poles)", "[scene]") {
+  const Scene s = loadScene(std::string(OBLONG_SOURCE_DIR) + "/scenes/sphere.json");
+  const Displacement& d = *s.meshes[0].displacement;
+  const Mesh& m = s.meshes[0].mesh;
+  // Every sample a micro-triangle of a pole triangle can use (its uv box snapped
+  // outward, plus one sample) has height exactly 0.
+  for (size_t i = 0; i < m.triangles.size(); ++i) {
+    const DisplacedTriangle T = m.triangle(i);
+    const bool pole = T.uvBox.lo.y == 0.0f || T.uvBox.hi.y == 1.0f;
+    if (!pole) continue;
+    const dvec2 lo = d.toSample(T.uvBox.lo), hi = d.toSample(T.uvBox.hi);
+    for (int j = int(std::floor(lo.y)) - 1; j <= int(std::ceil(hi.y)) + 1; ++j)
+      for (int k = int(std::floor(lo.x)) - 1; k <= int(std::ceil(hi.x)) + 1; ++k) REQUIRE(d.sampleHeight(k, j) == 0.0f);
   }
 }

@@ -1,0 +1,133 @@
+// Traversal targets (issue 4): primary rays on a scene, single thread, for the
+// canonical configuration (rmip + newton + midpoint2d), the TFDM configuration
+// (minmax_mipmap + quadtree, no inversion) and the pre-tessellated Embree scene, side by
+// side in one run. Counters: Mrays/s (per core), steps per ray (boxes + marched cells,
+// as the RMIP paper counts them), acceleration-structure memory (MB).
+//
+//   ./build/bench_traversal [--scene scenes/asteroid.json] [--size 256x192]
+//       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+//       --benchmark_out=out.json --benchmark_out_format=json
+//   /usr/bin/python3 experiments/traversal/summarize.py out.json
+//
+// Build with -DOBLONG_STATS=OFF for timings (the per-ray RayCounters stay: they are
+// plain integer increments on the ray's own struct).
+#include "core/procedural.h"
+#include "core/scene.h"
+#include "render/camera.h"
+#include "render/embree_scene.h"
+
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+
+#include <cstring>
+#include <map>
+#include <memory>
+
+using namespace oblong;
+
+namespace {
+
+std::string gScene;  // empty: the built-in default scene
+ivec2 gSize{256, 192};
+
+const Scene& scene() {
+  static Scene s = gScene.empty() ? defaultScene() : loadScene(gScene);
+  return s;
+}
+
+const std::vector<Ray>& primaryRays() {
+  static std::vector<Ray> rays = [] {
+    PinholeCamera cam(scene().camera, gSize);
+    std::vector<Ray> r;
+    for (int y = 0; y < gSize.y; ++y)
+      for (int x = 0; x < gSize.x; ++x) r.push_back(cam.generate(x + 0.5f, y + 0.5f));
+    return r;
+  }();
+  return rays;
+}
+
+struct Config {
+  std::string name;
+  AccelOptions opts;
+};
+
+std::vector<Config> configs() {
+  std::vector<Config> c;
+  AccelOptions canonical;  // defaults: rmip + newton + midpoint2d, inversion on
+  c.push_back({"canonical", canonical});
+  AccelOptions tfdm;
+  tfdm.traversal.range = "minmax_mipmap";
+  tfdm.traversal.splitter = "quadtree";
+  tfdm.traversal.inversionInTraversal = false;
+  c.push_back({"tfdm", tfdm});
+  AccelOptions tess;
+  tess.tessellate = true;
+  c.push_back({"tessellated", tess});
+  return c;
+}
+
+const EmbreeScene& accel(const Config& c) {
+  static std::map<std::string, std::unique_ptr<EmbreeScene>> cache;
+  auto& p = cache[c.name];
+  if (!p) p = std::make_unique<EmbreeScene>(scene(), c.opts);
+  return *p;
+}
+
+void trace(benchmark::State& state, const Config& c) {
+  const EmbreeScene& a = accel(c);
+  const auto& rays = primaryRays();
+  RayCounters counters;
+  int64_t hits = 0, passes = 0;
+  for (auto _ : state) {
+    counters = RayCounters{};
+    hits = 0;
+    for (const Ray& r : rays) {
+      const Hit h = a.intersect(r, &counters);
+      hits += h.valid();
+      benchmark::DoNotOptimize(h);
+    }
+    ++passes;
+  }
+  const double n = double(rays.size());
+  state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(rays.size()));
+  state.counters["Mrays/s"] = benchmark::Counter(n * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["steps/ray"] = double(counters.steps()) / n;
+  state.counters["boxes/ray"] = double(counters.boxes) / n;
+  state.counters["cells/ray"] = double(counters.cellsMarched) / n;
+  state.counters["inversions/ray"] = double(counters.inversions) / n;
+  state.counters["hit%"] = 100.0 * double(hits) / n;
+  state.counters["MB"] = double(totalBytes(a.memory())) / 1e6;
+  state.counters["build_s"] = a.buildSeconds();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Our own flags first; the rest go to Google Benchmark.
+  std::vector<char*> rest{argv[0]};
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--scene") && i + 1 < argc) gScene = argv[++i];
+    else if (!std::strcmp(argv[i], "--size") && i + 1 < argc) {
+      if (std::sscanf(argv[++i], "%dx%d", &gSize.x, &gSize.y) != 2 || gSize.x <= 0 || gSize.y <= 0) {
+        fmt::print(stderr, "bench_traversal: --size: expected WxH, got '{}'\n", argv[i]);
+        return 1;
+      }
+    } else rest.push_back(argv[i]);
+  }
+  int n = int(rest.size());
+  try {
+    scene();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "bench_traversal: {}\n", e.what());
+    return 1;
+  }
+  for (const Config& c : configs())
+    benchmark::RegisterBenchmark(("primary/" + c.name).c_str(), [c](benchmark::State& s) { trace(s, c); })
+        ->Unit(benchmark::kMillisecond)
+        ->MeasureProcessCPUTime()
+        ->UseRealTime();
+  benchmark::Initialize(&n, rest.data());
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

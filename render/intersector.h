@@ -1,0 +1,84 @@
+// Intersector: the per-mesh interface between Embree's user geometry and a traversal
+// (DESIGN §2). One Intersector serves one displaced mesh: it bounds every displaced
+// triangle (its prism) and finds the first hit of a ray with one triangle's
+// micro-geometry. The Embree callback is one indirect call per ray/prism pair; inside,
+// the traversal is templated on the concrete strategies (no virtual call per step).
+#pragma once
+
+#include "core/heightmap.h"
+#include "core/math.h"
+#include "core/memory.h"
+#include "core/params.h"
+#include "core/triangle.h"
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace oblong {
+
+// Per-ray work counters (summed over the prisms a ray visits).
+struct RayCounters {
+  int64_t boxes = 0;          // ray/box tests of uv-rectangle bounds
+  int64_t rangeQueries = 0;   // RangeQuery::query calls
+  int64_t inversions = 0;     // Inverter calls
+  int64_t cellsMarched = 0;   // grid cells visited by texel marching
+  int64_t microTriangles = 0; // ray/micro-triangle tests
+  int64_t prisms = 0;         // prisms entered
+  // Traversal steps as the RMIP paper counts them (Fig. 9): boxes + marched cells.
+  int64_t steps() const { return boxes + cellsMarched; }
+  RayCounters& operator+=(const RayCounters& o) {
+    boxes += o.boxes, rangeQueries += o.rangeQueries, inversions += o.inversions;
+    cellsMarched += o.cellsMarched, microTriangles += o.microTriangles, prisms += o.prisms;
+    return *this;
+  }
+};
+
+struct TriangleHit {
+  float t = kInfinity;
+  vec2 uv{0.0f};  // texture coordinates of the hit (before tiling)
+  vec3 ng{0.0f};  // unit geometric normal of the hit micro-triangle
+};
+
+// The strategy choice for the displaced meshes of a scene (names as on the CLI).
+struct TraversalConfig {
+  std::string range = "rmip";          // RangeQuery name
+  std::string inverter = "newton";     // Inverter name
+  std::string splitter = "midpoint2d"; // Splitter name
+  float marchingScale = 4.0f;          // texels: rectangles at most this size are marched
+  bool inversionInTraversal = true;    // invert box intervals to tighten rectangles (Fig. 12)
+  // "" (the traversal above) | "bruteforce" (every micro-triangle of the prism's
+  // triangle: the oracle) | "fixedstep" (PDM-style constant-step marching, approximate).
+  // The "tessellated" baseline is not an Intersector: it is EmbreeScene.
+  std::string baseline;
+  float fixedStep = 0.0f;  // world-space step of "fixedstep" (0: one texel's world size)
+  // Strategy parameters by strategy (JSON objects), e.g. rmip: {"resolution": 0.5}.
+  nlohmann::json rangeParams = nlohmann::json::object();
+  nlohmann::json inverterParams = nlohmann::json::object();
+  nlohmann::json splitterParams = nlohmann::json::object();
+};
+
+class Intersector {
+ public:
+  virtual ~Intersector() = default;
+  virtual std::string name() const = 0;  // e.g. "rmip+newton+midpoint2d"
+  virtual size_t size() const = 0;       // number of triangles (Embree primitives)
+  // Conservative world bounds of triangle `prim`'s bounding prism; empty for triangles
+  // that cannot be displaced (skipped with a warning at build time).
+  virtual AABB bounds(uint32_t prim) const = 0;
+  // First hit of r with triangle `prim`'s micro-geometry in [r.tmin, r.tmax]
+  // (r.tmax is the closest hit found so far: prune against it). Adds to c.
+  virtual bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const = 0;
+  virtual MemoryReport memory() const = 0;
+};
+
+// Builds the intersector for one displaced mesh: its triangles (DisplacedTriangle,
+// prepared) and its displacement. Unknown names / unused parameters throw oblong::Error.
+std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg,
+                                               std::vector<DisplacedTriangle> triangles,
+                                               const Displacement& disp);
+
+}  // namespace oblong

@@ -1,0 +1,79 @@
+// Ray / micro-triangle test shared by every Intersector (traversals and baselines), so
+// that they agree bit for bit on each micro-triangle.
+//
+// Watertight (Woop, Benthin, Wald 2013, "Watertight Ray/Triangle Intersection", as in
+// pbrt-v4 and Embree's robust mode): the ray is made the +z axis by a permutation and a
+// shear computed once per ray; the three 2D edge functions of the transformed vertices
+// decide the hit and are recomputed in double when one is exactly zero. Two triangles
+// sharing an edge (bit-identical vertices, as the micro-geometry guarantees) therefore
+// cannot both miss a ray that crosses the edge.
+//
+// t is accepted in the closed range [tmin, tmax]. Ties between triangles are resolved by
+// the caller's strict `t < best` (the first tested wins), which is deterministic for a
+// fixed traversal order.
+#pragma once
+
+#include "core/math.h"
+#include "core/microgeometry.h"
+
+namespace oblong {
+
+struct WatertightRay {
+  vec3 o;
+  int kx = 0, ky = 1, kz = 2;
+  float Sx = 0, Sy = 0, Sz = 1;
+
+  explicit WatertightRay(const Ray& r) : o(r.o) {
+    const vec3 ad = glm::abs(r.d);
+    kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    kx = (kz + 1) % 3;
+    ky = (kx + 1) % 3;
+    if (r.d[kz] < 0.0f) std::swap(kx, ky);  // keep the winding
+    Sx = -r.d[kx] / r.d[kz];
+    Sy = -r.d[ky] / r.d[kz];
+    Sz = 1.0f / r.d[kz];
+  }
+};
+
+struct MicroHit {
+  float t;
+  float b0, b1, b2;  // barycentrics of v[0], v[1], v[2]
+};
+
+// Hit with t in [tmin, tmax]? (Degenerate triangles and rays in their plane miss.)
+inline bool intersectMicro(const WatertightRay& R, const vec3& p0, const vec3& p1, const vec3& p2, float tmin,
+                           float tmax, MicroHit& h) {
+  const vec3 A = p0 - R.o, B = p1 - R.o, C = p2 - R.o;
+  const float Ax = A[R.kx] + R.Sx * A[R.kz], Ay = A[R.ky] + R.Sy * A[R.kz];
+  const float Bx = B[R.kx] + R.Sx * B[R.kz], By = B[R.ky] + R.Sy * B[R.kz];
+  const float Cx = C[R.kx] + R.Sx * C[R.kz], Cy = C[R.ky] + R.Sy * C[R.kz];
+  float U = Cx * By - Cy * Bx;
+  float V = Ax * Cy - Ay * Cx;
+  float W = Bx * Ay - By * Ax;
+  if (U == 0.0f || V == 0.0f || W == 0.0f) {  // on an edge in float: decide in double
+    U = float(double(Cx) * By - double(Cy) * Bx);
+    V = float(double(Ax) * Cy - double(Ay) * Cx);
+    W = float(double(Bx) * Ay - double(By) * Ax);
+  }
+  if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return false;
+  const float det = U + V + W;
+  if (det == 0.0f) return false;
+  const float Az = R.Sz * A[R.kz], Bz = R.Sz * B[R.kz], Cz = R.Sz * C[R.kz];
+  const float T = U * Az + V * Bz + W * Cz;
+  const float inv = 1.0f / det;
+  const float t = T * inv;
+  if (!(t >= tmin && t <= tmax)) return false;
+  h = {t, U * inv, V * inv, W * inv};
+  return true;
+}
+
+// Fills a TriangleHit-like result: uv interpolated, unit geometric normal
+// (v1 - v0) x (v2 - v0), the convention of Embree's Ng and of the tessellated baseline.
+inline void microHitAttributes(const MicroTriangle& m, const MicroHit& h, vec2& uv, vec3& ng) {
+  uv = h.b0 * m.v[0].uv + h.b1 * m.v[1].uv + h.b2 * m.v[2].uv;
+  const vec3 n = glm::cross(m.v[1].p - m.v[0].p, m.v[2].p - m.v[0].p);
+  const float len = glm::length(n);
+  ng = len > 0.0f ? n / len : vec3(0.0f);
+}
+
+}  // namespace oblong

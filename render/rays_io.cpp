@@ -1,0 +1,156 @@
+#include "render/rays_io.h"
+
+#include "core/error.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace oblong {
+
+namespace {
+
+constexpr const char* kRayHeader = "ox,oy,oz,dx,dy,dz,tmin,tmax";
+constexpr const char* kHitHeader = "t,mesh,prim,u,v";
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::vector<std::string> splitCSV(const std::string& line) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = line.find(',', start);
+    std::string f = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    while (!f.empty() && (f.back() == ' ' || f.back() == '\r' || f.back() == '\t')) f.pop_back();
+    while (!f.empty() && (f.front() == ' ' || f.front() == '\t')) f.erase(f.begin());
+    out.push_back(f);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+float parseFloat(const std::string& f, const std::string& where, const char* field) {
+  // strtof accepts "inf"; std::from_chars for float needs GCC 11+ and also accepts it.
+  if (f.empty()) fail(where, "empty field '{}'", field);
+  char* end = nullptr;
+  errno = 0;
+  const float v = std::strtof(f.c_str(), &end);
+  if (end != f.c_str() + f.size()) fail(where, "field '{}' is not a number: '{}'", field, f);
+  if (std::isnan(v)) fail(where, "field '{}' is NaN", field);
+  return v;
+}
+
+void checkRay(const Ray& r, const std::string& where) {
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(r.o[a]) || !std::isfinite(r.d[a])) fail(where, "ray origin and direction must be finite");
+  if (r.d == vec3(0.0f)) fail(where, "ray direction is zero");
+  if (!std::isfinite(r.tmin) || std::isnan(r.tmax) || r.tmin > r.tmax)
+    fail(where, "need finite tmin <= tmax (tmax may be inf), got [{}, {}]", r.tmin, r.tmax);
+}
+
+}  // namespace
+
+std::vector<Ray> readRays(const std::string& path) {
+  std::vector<Ray> rays;
+  if (endsWith(path, ".bin")) {
+    std::ifstream f(path, std::ios::binary | std::ios::ate);
+    if (!f) fail(path, "cannot open ray file");
+    const std::streamsize size = f.tellg();
+    if (size % 32 != 0) fail(path, "size {} bytes is not a multiple of 32 (8 float32 per ray)", size);
+    f.seekg(0);
+    std::vector<float> buf(size_t(size) / 4);
+    if (!f.read(reinterpret_cast<char*>(buf.data()), size)) fail(path, "cannot read ray file");
+    rays.resize(buf.size() / 8);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const float* x = &buf[8 * i];
+      rays[i] = Ray{vec3(x[0], x[1], x[2]), vec3(x[3], x[4], x[5]), x[6], x[7]};
+      checkRay(rays[i], fmt::format("{}: ray {}", path, i));
+    }
+    return rays;
+  }
+  std::ifstream f(path);
+  if (!f) fail(path, "cannot open ray file");
+  std::string line;
+  if (!std::getline(f, line)) fail(path, "empty file; expected the header '{}'", kRayHeader);
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != kRayHeader) fail(path, "line 1: expected the header '{}', got '{}'", kRayHeader, line);
+  static const char* names[8] = {"ox", "oy", "oz", "dx", "dy", "dz", "tmin", "tmax"};
+  for (size_t lineNo = 2; std::getline(f, line); ++lineNo) {
+    if (line.empty() || line == "\r") continue;
+    const std::string where = fmt::format("{}: line {}", path, lineNo);
+    const auto fields = splitCSV(line);
+    if (fields.size() != 8) fail(where, "expected 8 fields, got {}", fields.size());
+    float x[8];
+    for (int k = 0; k < 8; ++k) x[k] = parseFloat(fields[k], where, names[k]);
+    Ray r{vec3(x[0], x[1], x[2]), vec3(x[3], x[4], x[5]), x[6], x[7]};
+    checkRay(r, where);
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+void writeRays(const std::string& path, const std::vector<Ray>& rays) {
+  if (endsWith(path, ".bin")) {
+    std::ofstream f(path, std::ios::binary);
+    if (!f) fail(path, "cannot write ray file");
+    for (const Ray& r : rays) {
+      const float x[8] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax};
+      f.write(reinterpret_cast<const char*>(x), sizeof x);
+    }
+    return;
+  }
+  std::ofstream f(path);
+  if (!f) fail(path, "cannot write ray file");
+  f << kRayHeader << "\n";
+  for (const Ray& r : rays)
+    f << fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", r.o.x, r.o.y, r.o.z, r.d.x, r.d.y,
+                     r.d.z, r.tmin, r.tmax);
+}
+
+void writeHits(const std::string& path, const std::vector<Hit>& hits) {
+  std::ofstream f(path);
+  if (!f) fail(path, "cannot write hit file");
+  f << kHitHeader << "\n";
+  std::string buf;
+  for (const Hit& h : hits) {
+    if (!h.valid()) {
+      f << "inf,,,,\n";
+      continue;
+    }
+    // %.9g round-trips a float exactly.
+    f << fmt::format("{:.9g},{},{},{:.9g},{:.9g}\n", h.t, h.mesh, h.prim, h.uv.x, h.uv.y);
+  }
+  if (!f) fail(path, "write failed");
+}
+
+std::vector<Hit> readHits(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) fail(path, "cannot open hit file");
+  std::string line;
+  if (!std::getline(f, line) || line != kHitHeader) fail(path, "line 1: expected the header '{}'", kHitHeader);
+  std::vector<Hit> hits;
+  for (size_t lineNo = 2; std::getline(f, line); ++lineNo) {
+    const std::string where = fmt::format("{}: line {}", path, lineNo);
+    const auto fields = splitCSV(line);
+    if (fields.size() != 5) fail(where, "expected 5 fields, got {}", fields.size());
+    Hit h;
+    if (fields[0].empty() || fields[0] == "inf") {
+      hits.push_back(h);
+      continue;
+    }
+    h.t = parseFloat(fields[0], where, "t");
+    h.mesh = std::stoi(fields[1]);
+    h.prim = std::stoi(fields[2]);
+    h.uv = vec2(parseFloat(fields[3], where, "u"), parseFloat(fields[4], where, "v"));
+    hits.push_back(h);
+  }
+  return hits;
+}
+
+}  // namespace oblong

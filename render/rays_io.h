@@ -1,0 +1,26 @@
+// Ray and hit files for `oblong trace`, so that anything outside the project can check
+// the hits:
+//   rays: CSV with header `ox,oy,oz,dx,dy,dz,tmin,tmax` (one ray a line), or a `.bin`
+//         file of 8 little-endian float32 per ray in the same order;
+//   hits: CSV with header `t,mesh,prim,u,v`; a miss is `inf,,,,`; prim is the index of
+//         the base triangle in the mesh as loaded, (u,v) the texture coordinates of
+//         the hit before tiling.
+#pragma once
+
+#include "core/math.h"
+#include "render/embree_scene.h"
+
+#include <string>
+#include <vector>
+
+namespace oblong {
+
+// Throws oblong::Error naming the file (and line) on any problem: missing file, wrong
+// header, wrong field count, non-numeric or non-finite values (tmax may be inf),
+// zero direction, tmin > tmax, a .bin size not a multiple of 32 bytes.
+std::vector<Ray> readRays(const std::string& path);
+void writeRays(const std::string& path, const std::vector<Ray>& rays);  // by extension
+void writeHits(const std::string& path, const std::vector<Hit>& hits);
+std::vector<Hit> readHits(const std::string& path);  // t, mesh, prim, uv only
+
+}  // namespace oblong

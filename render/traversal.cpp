@@ -1,0 +1,245 @@
+// createIntersector: the traversal for any registered strategy combination, and the two
+// baselines that share the micro-geometry ("bruteforce", the oracle, and "fixedstep",
+// PDM-style constant-step marching). See render/traversal.h and docs/traversal.md.
+#include "render/traversal.h"
+
+#include "core/error.h"
+#include "strategies/minmax_mipmap.h"
+#include "strategies/rmip.h"
+#include "strategies/safety_zones.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace oblong {
+
+OBLONG_STAT_COUNTER("bruteforce/Prisms", bfPrisms);
+OBLONG_STAT_COUNTER("bruteforce/MicroTriangles", bfMicroTris);
+OBLONG_STAT_COUNTER("fixedstep/Prisms", fsPrisms);
+OBLONG_STAT_COUNTER("fixedstep/Steps", fsSteps);
+OBLONG_STAT_COUNTER("fixedstep/Hits", fsHits);
+
+void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what) {
+  size_t skipped = 0, first = 0;
+  for (size_t i = mesh.params.size(); i-- > 0;)
+    if (!mesh.params[i].valid) ++skipped, first = i;
+  if (skipped)
+    fmt::print(stderr,
+               "oblong: warning: {}: skipped {} of {} displaced triangles that cannot be displaced (zero area, "
+               "degenerate uvs or vanishing normals; first: triangle {})\n",
+               what, skipped, mesh.params.size(), first);
+}
+
+namespace {
+
+// Heights over T's uv box by brute force over the snapped sample range (baselines: no
+// RangeQuery is built for them).
+Interval exactHeights(const DisplacedTriangle& T, const Displacement& d) {
+  const dvec2 a = d.toSample(T.uvBox.lo), b = d.toSample(T.uvBox.hi);
+  constexpr double eps = 1e-5, lim = 1e9;
+  const SampleRange r{int(std::clamp(std::floor(a.x - eps), -lim, lim)), int(std::clamp(std::floor(a.y - eps), -lim, lim)),
+                      int(std::clamp(std::ceil(b.x + eps), -lim, lim)), int(std::clamp(std::ceil(b.y + eps), -lim, lim))};
+  return d.toHeight(bruteForceRange(*d.map, r));
+}
+
+// The oracle: every micro-triangle of the triangle, in cell order, no pruning at all
+// (not even the prism's box), computed on the fly (nothing cached).
+class BruteForce final : public Intersector {
+ public:
+  explicit BruteForce(TraversalMesh mesh) : mesh_(std::move(mesh)) {}
+  std::string name() const override { return "bruteforce"; }
+  size_t size() const override { return mesh_.tris.size(); }
+  AABB bounds(uint32_t prim) const override { return mesh_.bounds(prim); }
+  MemoryReport memory() const override { return {{"bruteforce/triangles", mesh_.bytes()}}; }
+
+  bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
+    if (!mesh_.params[prim].valid) return false;
+    const DisplacedTriangle& T = mesh_.tris[prim];
+    const CellRange& cr = mesh_.cells[prim];
+    const MicroCells mc(T, mesh_.disp);
+    const WatertightRay wr(r);
+    ClosestHit best;
+    MicroTriangle buf[MicroCells::kMaxPerCell];
+    int64_t tested = 0;
+    for (int j = cr.y0; j <= cr.y1; ++j)
+      for (int i = cr.x0; i <= cr.x1; ++i) {
+        const int n = mc.cell(i, j, buf);
+        tested += n;
+        for (int k = 0; k < n; ++k) best.test(wr, buf[k], r.tmin, r.tmax);
+      }
+    c.prisms += 1;
+    c.microTriangles += tested;
+    c.cellsMarched += int64_t(cr.x1 - cr.x0 + 1) * (cr.y1 - cr.y0 + 1);
+    OBLONG_STAT_INC(bfPrisms);
+    OBLONG_STAT_ADD(bfMicroTris, tested);
+    if (best.found) best.fill(hit);
+    return best.found;
+  }
+
+ private:
+  TraversalMesh mesh_;
+};
+
+// PDM-style fixed-step marching (Hoetzlein 2025, §4.2): the ray is sampled at a constant
+// world-space step dt inside the exact prism; each sample is projected to the base
+// triangle (point-wise inversion) and its height compared with the micro-geometry's
+// height there; a sign change of (ray height − surface height) is refined by secant
+// steps. Approximate by design (it can step over thin features and grazing hits): it is
+// the "error against run time" baseline, excluded from exactness tests.
+class FixedStep final : public Intersector {
+ public:
+  FixedStep(TraversalMesh mesh, float step, std::unique_ptr<Inverter> inv)
+      : mesh_(std::move(mesh)), step_(step), inv_(std::move(inv)) {}
+  std::string name() const override { return "fixedstep"; }
+  size_t size() const override { return mesh_.tris.size(); }
+  AABB bounds(uint32_t prim) const override { return mesh_.bounds(prim); }
+  MemoryReport memory() const override { return {{"fixedstep/triangles", mesh_.bytes()}}; }
+
+  bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
+    const PrismParams& P = mesh_.params[prim];
+    if (!P.valid) return false;
+    const DisplacedTriangle& T = mesh_.tris[prim];
+    const Displacement& d = mesh_.disp;
+    c.prisms += 1;
+    OBLONG_STAT_INC(fsPrisms);
+    const dvec3 O(r.o), D(r.d);
+    Prism::Crossing first, last;
+    if (Prism::exact(T, P.a, P.b).crossings(O, D, first, last) < 2) return false;
+    const double tIn = std::max(first.t, double(r.tmin)), tOut = std::min(last.t, double(r.tmax));
+    if (!(tIn <= tOut)) return false;
+    const LocalFrame F = LocalFrame::make(T, d);
+    // Default step: one texel's world size (the shorter texel side) along the ray.
+    double dt = step_;
+    if (!(dt > 0)) dt = std::min(glm::length(F.PX), glm::length(F.PY));
+    dt /= glm::length(D);
+    // f(t) = height of the ray point above the micro-geometry at its projection.
+    auto f = [&](double t, vec2& uv) -> double {
+      ++c.inversions;
+      const InversionResult q = inv_->invert(vec3(O + t * D), T);
+      if (!std::isfinite(q.h) || !q.insideT(1e-4f)) return std::nan("");
+      uv = q.uv;
+      return double(q.h) - double(d.micro(q.uv));
+    };
+    vec2 uv0, uv1;
+    double t0 = tIn, f0 = f(t0, uv0);
+    int64_t steps = 0;
+    while (t0 < tOut) {
+      const double t1 = std::min(t0 + dt, tOut);
+      const double f1 = f(t1, uv1);
+      ++steps;
+      if (std::isfinite(f0) && std::isfinite(f1) && (f0 == 0 || (f0 < 0) != (f1 < 0))) {
+        // Secant refinement inside [t0, t1].
+        double a = t0, fa = f0, b = t1, fb = f1, t = t1;
+        vec2 uv = uv1;
+        for (int it = 0; it < 6 && fb != fa; ++it) {
+          t = std::clamp(b - fb * (b - a) / (fb - fa), std::min(a, b), std::max(a, b));
+          vec2 uvt;
+          const double ft = f(t, uvt);
+          if (!std::isfinite(ft)) break;
+          uv = uvt;
+          if ((ft < 0) == (fa < 0)) a = t, fa = ft;
+          else b = t, fb = ft;
+        }
+        c.cellsMarched += steps;
+        OBLONG_STAT_ADD(fsSteps, steps);
+        OBLONG_STAT_INC(fsHits);
+        hit.t = float(t);
+        hit.uv = uv;
+        hit.ng = normalAt(T, uv, F);
+        return true;
+      }
+      t0 = t1, f0 = f1, uv0 = uv1;
+    }
+    c.cellsMarched += steps;
+    OBLONG_STAT_ADD(fsSteps, steps);
+    return false;
+  }
+
+ private:
+  // Normal of the micro-geometry around uv by finite differences over one texel
+  // (S_u × S_v, the orientation of the micro-triangles).
+  vec3 normalAt(const DisplacedTriangle& T, const vec2& uv, const LocalFrame& F) const {
+    const Displacement& d = mesh_.disp;
+    auto S = [&](const vec2& q) {
+      const vec2 b = T.baryOfUV(q);
+      return T.P(b.x, b.y) + d.micro(q) * glm::normalize(T.N(b.x, b.y));
+    };
+    const vec2 du(float(0.5 / F.perUV.x), 0.0f), dv(0.0f, float(0.5 / F.perUV.y));
+    const vec3 n = glm::cross(S(uv + du) - S(uv - du), S(uv + dv) - S(uv - dv));
+    const float len = glm::length(n);
+    return len > 0 ? n / len : T.faceNormal;
+  }
+
+  TraversalMesh mesh_;
+  float step_;
+  std::unique_ptr<Inverter> inv_;
+};
+
+}  // namespace
+
+std::unique_ptr<Intersector> makeBruteForce(std::vector<DisplacedTriangle> triangles, const Displacement& disp) {
+  TraversalMesh mesh;
+  mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });
+  warnSkippedTriangles(mesh, "bruteforce");
+  return std::make_unique<BruteForce>(std::move(mesh));
+}
+
+std::unique_ptr<Intersector> makeFixedStep(std::vector<DisplacedTriangle> triangles, const Displacement& disp,
+                                           float step, std::unique_ptr<Inverter> inv) {
+  TraversalMesh mesh;
+  mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });
+  warnSkippedTriangles(mesh, "fixedstep");
+  return std::make_unique<FixedStep>(std::move(mesh), step, std::move(inv));
+}
+
+std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::vector<DisplacedTriangle> triangles,
+                                               const Displacement& disp) {
+  if (!disp.map) throw Error("traversal: a displaced mesh needs a displacement map");
+  if (cfg.baseline == "bruteforce") return makeBruteForce(std::move(triangles), disp);
+  if (cfg.baseline == "fixedstep") {
+    if (!(cfg.fixedStep >= 0) || !std::isfinite(cfg.fixedStep))
+      fail("traversal", "fixed step must be >= 0 (0: one texel), got {}", cfg.fixedStep);
+    ParamSet ips(cfg.inverterParams, "strategies.inverter");
+    auto inv = createInverter(cfg.inverter, ips);
+    return makeFixedStep(std::move(triangles), disp, cfg.fixedStep, std::move(inv));
+  }
+  if (!cfg.baseline.empty())
+    fail("traversal", "unknown baseline '{}' (known: bruteforce, fixedstep; the tessellated baseline is not an "
+                      "intersector)", cfg.baseline);
+  if (!(cfg.marchingScale > 0) || !std::isfinite(cfg.marchingScale))
+    fail("traversal", "marching scale must be a positive number of texels, got {}", cfg.marchingScale);
+
+  // Invariant 4: the range query is built for what these triangles can ask.
+  std::vector<Rect> boxes;
+  boxes.reserve(triangles.size());
+  for (const DisplacedTriangle& T : triangles)
+    if (T.uvArea2 != 0.0f) boxes.push_back(T.uvBox);
+  ParamSet rps(cfg.rangeParams, "strategies.range");
+  auto rq = createRangeQuery(cfg.range, rps, RangeQueryContext{disp, QueryNeeds::forRects(disp, boxes)});
+  ParamSet ips(cfg.inverterParams, "strategies.inverter");
+  auto inv = createInverter(cfg.inverter, ips);
+  ParamSet sps(cfg.splitterParams, "strategies.splitter");
+  auto split = createSplitter(cfg.splitter, sps);
+
+  TraversalParts parts;
+  parts.name = cfg.range + "+" + cfg.inverter + "+" + cfg.splitter;
+  const RangeQuery& q = *rq;
+  parts.mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return q.queryVirtual(T.uvBox); });
+  warnSkippedTriangles(parts.mesh, parts.name);
+  parts.rq = std::move(rq);
+  parts.inv = std::move(inv);
+  parts.split = std::move(split);
+  parts.opt = TraversalOptions{cfg.marchingScale, cfg.inversionInTraversal};
+
+  std::unique_ptr<Intersector> out;
+  const RangeQuery* r = parts.rq.get();
+  if (dynamic_cast<const Rmip*>(r)) out = makeRmipTraversal(std::move(parts));
+  else if (dynamic_cast<const MinMaxMipmap*>(r)) out = makeMinMaxMipmapTraversal(std::move(parts));
+  else if (dynamic_cast<const SafetyZones*>(r)) out = makeSafetyZonesTraversal(std::move(parts));
+  // Anything else (ceres, a new strategy): virtual calls, same algorithm.
+  if (!out) out = makeGenericTraversal(std::move(parts));
+  return out;
+}
+
+}  // namespace oblong

@@ -1,0 +1,665 @@
+// The traversal driver (RMIP paper Alg. 1; DESIGN §2): Traversal<RQ, Inv, Split>, an
+// Intersector templated on the concrete strategy types so that the hot loop has no
+// virtual call. createIntersector (render/intersector.h) instantiates it for every
+// registered combination of {rmip, minmax_mipmap, safety_zones} × {newton, cubic} ×
+// {midpoint2d, midpoint3d, quadtree} and falls back to Traversal<RangeQuery, Inverter,
+// Splitter> (virtual calls) for anything else (ceres, new strategies).
+//
+// Per ray and displaced triangle (docs/traversal.md has the reasoning):
+//   1. Clip the ray to the triangle's inflated prism (render/prism.h); its crossings give
+//      the interval [tIn, tOut] and the uv of its ends; a ray starting (or ending) inside
+//      gets its end's uv by inversion.
+//   2. Split [tIn, tOut] where the curve may turn (render/psi.h): monotone pieces.
+//   3. Fixed-size stack of pieces, front to back. A piece whose rectangle is at most
+//      `marchingScale` texels is marched (below); otherwise its rectangle, dilated by ε
+//      and snapped outward to whole cells, is bounded (RangeQuery + interval arithmetic,
+//      render/rect_bounds.h), the ray is clipped to that box, the piece is optionally
+//      tightened by inverting the clipped ends (Fig. 12 "inversion during traversal"),
+//      and the splitter cuts it in two.
+//   4. Texel marching (§4.4): the cells within ε of the monotone piece, column by column
+//      along its major axis, front to back; ψ's crossing with each column's sides gives
+//      the rows to test. Each cell's micro-triangles come from core/microgeometry's
+//      MicroCells (bit-identical to the oracle's) and are tested watertight.
+//   5. Every hit updates the closest hit; pieces starting beyond it are skipped, so the
+//      first hit ends the traversal in practice (front-to-back order).
+// Whenever the curve machinery cannot vouch for a piece (ill-posed triangle, failed
+// inversion, failed split), that part falls back to projection-free box subdivision of
+// whole cell ranges: slower, never wrong.
+#pragma once
+
+#include "core/microgeometry.h"
+#include "core/stats.h"
+#include "inversion/inverter.h"
+#include "render/intersector.h"
+#include "render/microtri.h"
+#include "render/prism.h"
+#include "render/psi.h"
+#include "render/rect_bounds.h"
+#include "strategies/range_query.h"
+#include "strategies/splitter.h"
+
+#include <array>
+#include <memory>
+#include <new>
+#include <type_traits>
+
+namespace oblong {
+
+OBLONG_STAT_COUNTER("traversal/Prisms", travPrisms);
+OBLONG_STAT_COUNTER("traversal/Hits", travHits);
+OBLONG_STAT_COUNTER("traversal/Boxes", travBoxes);
+OBLONG_STAT_COUNTER("traversal/RangeQueries", travRangeQueries);
+OBLONG_STAT_COUNTER("traversal/Inversions", travInversions);
+OBLONG_STAT_COUNTER("traversal/CellsMarched", travCells);
+OBLONG_STAT_COUNTER("traversal/MicroTriangles", travMicroTris);
+OBLONG_STAT_COUNTER("traversal/Leaves", travLeaves);
+OBLONG_STAT_COUNTER("traversal/TurningSplits", travTurning);
+OBLONG_STAT_COUNTER("traversal/BoxOnlyPieces", travBoxOnly);
+OBLONG_STAT_COUNTER("traversal/BoxOnlyPrisms", travBoxOnlyPrisms);
+OBLONG_STAT_COUNTER("traversal/PrismGrazes", travGrazes);
+OBLONG_STAT_COUNTER("traversal/IllPosedTriangles", travIllPosed);
+OBLONG_STAT_COUNTER("traversal/RejectedInversions", travBadInversions);
+OBLONG_STAT_COUNTER("traversal/StackOverflows", travOverflows);
+
+// Everything a displaced mesh's intersector shares, whatever the strategies.
+struct TraversalMesh {
+  std::vector<DisplacedTriangle> tris;
+  std::vector<PrismParams> params;
+  std::vector<CellRange> cells;  // cellsOverlapping(T) per triangle
+  Displacement disp;
+  float cellDelta = 0;  // maxCellDelta(map)
+
+  // Builds the per-triangle constants; heights(T) is [hmin, hmax] over T's uv box.
+  template <typename Heights>
+  void build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights);
+  size_t bytes() const {
+    return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
+           cells.capacity() * sizeof(CellRange);
+  }
+  // The world box of triangle `prim`'s exact prism (empty when it is skipped).
+  AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
+};
+
+// Skipped triangles (not displaceable) are reported once per mesh.
+void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what);
+
+template <typename Heights>
+void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights) {
+  tris = std::move(triangles);
+  disp = d;
+  cellDelta = maxCellDelta(*d.map);
+  params.resize(tris.size());
+  cells.resize(tris.size());
+  for (size_t i = 0; i < tris.size(); ++i) {
+    const DisplacedTriangle& T = tris[i];
+    cells[i] = cellsOverlapping(T, d);
+    const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
+    params[i] = ok ? analyzeShell(T, d, heights(T), cellDelta) : PrismParams{};
+  }
+}
+
+// The counters of one intersect() call, flushed to RayCounters and the statistics once.
+inline void flushCounters(const RayCounters& local, bool hit, RayCounters& c) {
+  c += local;
+  OBLONG_STAT_ADD(travPrisms, local.prisms);
+  OBLONG_STAT_ADD(travBoxes, local.boxes);
+  OBLONG_STAT_ADD(travRangeQueries, local.rangeQueries);
+  OBLONG_STAT_ADD(travInversions, local.inversions);
+  OBLONG_STAT_ADD(travCells, local.cellsMarched);
+  OBLONG_STAT_ADD(travMicroTris, local.microTriangles);
+  if (hit) OBLONG_STAT_INC(travHits);
+  (void)hit;
+}
+
+// Closest hit over micro-triangles, shared by the traversal and the baselines.
+struct ClosestHit {
+  float t = kInfinity;
+  bool found = false;
+  MicroTriangle tri{};
+  MicroHit h{};
+
+  void test(const WatertightRay& R, const MicroTriangle& m, float tmin, float tmax) {
+    MicroHit mh;
+    // Closed range [tmin, min(tmax, t)], then strict: the first of equal-t hits wins.
+    if (intersectMicro(R, m.v[0].p, m.v[1].p, m.v[2].p, tmin, std::min(tmax, t), mh) && (!found || mh.t < t)) {
+      t = mh.t, found = true, tri = m, h = mh;
+    }
+  }
+  void fill(TriangleHit& hit) const {
+    hit.t = t;
+    microHitAttributes(tri, h, hit.uv, hit.ng);
+  }
+};
+
+namespace detail {
+
+// Strategy calls: direct for concrete types, virtual for the abstract bases.
+template <typename RQ>
+inline Interval rawRange(const RQ& q, const SampleRange& r) {
+  return q.rawRange(r);
+}
+template <>
+inline Interval rawRange<RangeQuery>(const RangeQuery& q, const SampleRange& r) {
+  return q.rawRangeVirtual(r);
+}
+template <typename Inv>
+inline InversionResult invert(const Inv& inv, const vec3& X, const DisplacedTriangle& T) {
+  return inv.invertFast(X, T);
+}
+template <>
+inline InversionResult invert<Inverter>(const Inverter& inv, const vec3& X, const DisplacedTriangle& T) {
+  return inv.invert(X, T);
+}
+template <typename Split, typename Ctx>
+inline bool split(const Split& s, const CurvePiece& p, Ctx& ctx, CurvePiece& f, CurvePiece& b) {
+  return s.splitFast(p, ctx, f, b);
+}
+template <typename Ctx>
+inline bool split(const Splitter& s, const CurvePiece& p, Ctx& ctx, CurvePiece& f, CurvePiece& b) {
+  return s.splitVirtual(p, ctx, f, b);
+}
+
+}  // namespace detail
+
+struct TraversalOptions {
+  float marchingScale = 4.0f;
+  bool inversionInTraversal = true;
+};
+
+// One ray against one displaced triangle: the state of Alg. 1 and the splitters'
+// context. Lives on the stack of intersect(); allocates nothing.
+template <typename RQ, typename Inv>
+class RayPatch final : public SplitContext {
+ public:
+  static constexpr int kStack = 128;
+
+  RayPatch(const TraversalMesh& mesh, uint32_t prim, const RQ& rq, const Inv& inv, const TraversalOptions& opt,
+           const Ray& ray, RayCounters& counters)
+      : T_(mesh.tris[prim]),
+        P_(mesh.params[prim]),
+        d_(mesh.disp),
+        rq_(rq),
+        inv_(inv),
+        opt_(opt),
+        ray_(ray),
+        c_(counters),
+        F_(LocalFrame::make(T_, d_)),
+        mc_(T_, d_),
+        wr_(ray),
+        O_(ray.o),
+        D_(ray.d) {
+    invD_ = 1.0 / D_;
+    const CellRange& cr = mesh.cells[prim];
+    cellLo_ = ivec2(cr.x0, cr.y0) - F_.origin;
+    cellHi_ = ivec2(cr.x1, cr.y1) - F_.origin;
+    const dvec2 s0 = d_.toSample(T_.uvBox.lo), s1 = d_.toSample(T_.uvBox.hi);
+    sbLo_ = s0 - dvec2(F_.origin);
+    sbHi_ = s1 - dvec2(F_.origin);
+    // Rounding of the watertight test itself (a few ulps of |p - o|): the boxes and the
+    // inflated prism must hold the triangle as that test sees it.
+    double maxP = 0;
+    for (int k = 0; k < 3; ++k)
+      maxP = std::max({maxP, std::abs(double(T_.p[k].x)), std::abs(double(T_.p[k].y)), std::abs(double(T_.p[k].z))});
+    const double maxO = std::max({std::abs(O_.x), std::abs(O_.y), std::abs(O_.z)});
+    const double rayErr = 1e-6 * (maxP + maxO + std::abs(P_.a) + std::abs(P_.b));
+    boxPad_ = P_.vertexErr + rayErr;
+    const double dl = glm::length(D_);
+    // Slack for comparing float hit distances with double interval ends.
+    tAbs_ = 8 * boxPad_ / dl;
+    eps_ = P_.eps + P_.kxy * (2 * rayErr);
+    extraB_ = (P_.kb.x + P_.kb.y) * 2 * rayErr;
+    extraS_ = P_.ks * 2 * rayErr;
+    prismBox_ = Prism::exact(T_, P_.a, P_.b).bounds();
+    prismBox_.pad(boxPad_);
+  }
+
+  // --- SplitContext -------------------------------------------------------------------
+  bool crossing(const CurvePiece& p, int axis, double c, CurvePoint& out) final {
+    double q2, q1, q0, w[2], rp[2];
+    psi_.onLine(axis, c, q2, q1, q0);
+    const int n = quadraticRoots(q2, q1, q0, w, rp);
+    if (n <= 0) return false;
+    const int mi = 1 - axis;
+    const dvec2 lo = p.lo(), hi = p.hi();
+    int found = 0;
+    for (int k = 0; k < n; ++k) {
+      if (w[k] < lo[mi] - rp[k] || w[k] > hi[mi] + rp[k]) continue;
+      const dvec2 uv = axis == 0 ? dvec2(c, w[k]) : dvec2(w[k], c);
+      double t, s;
+      if (!rayParamAt(F_, O_, D_, uv, t, s)) continue;
+      if (!(t > p.a.t && t < p.b.t)) continue;
+      CurvePoint cp;
+      if (!makePoint(t, F_.bary(uv), s, cp)) continue;
+      out = cp;
+      ++found;
+    }
+    return found == 1;
+  }
+
+  bool pointAt(const CurvePiece&, double t, CurvePoint& out) final { return invertAt(t, out); }
+
+  ivec2 sampleOrigin() const final { return F_.origin; }
+
+  // --- the traversal ------------------------------------------------------------------
+  template <typename Split>
+  bool run(const Split& splitter) {
+    if (!P_.wellPosed) {
+      OBLONG_STAT_INC(travIllPosed);
+      return runBoxOnly();
+    }
+    // 1. Inflated prism (per-ray margin for the watertight test's rounding).
+    const Prism prism = Prism::inflated(F_, P_.a - P_.inflateS - extraS_, P_.b + P_.inflateS + extraS_,
+                                        P_.inflateB + extraB_);
+    BoxD pbox = prism.bounds();
+    pbox.pad(boxPad_);
+    double t0 = ray_.tmin - slack(ray_.tmin), t1 = ray_.tmax + slack(ray_.tmax);
+    pbox.clip(O_, invD_, t0, t1);
+    if (!(t0 <= t1)) return false;
+    Prism::Crossing first, last;
+    const int nc = prism.crossings(O_, D_, first, last);
+    if (nc == 0) return false;  // the line misses the inflated prism
+    if (nc < 2) {
+      OBLONG_STAT_INC(travGrazes);
+      return runBoxOnly();
+    }
+    const double tIn = std::max(first.t, double(ray_.tmin) - slack(ray_.tmin));
+    const double tOut = std::min(last.t, double(ray_.tmax) + slack(ray_.tmax));
+    if (!(tIn <= tOut)) return false;
+    CurvePoint A, B;
+    const bool okA = tIn == first.t ? makePoint(first.t, first.bary, first.s, A) : invertAt(tIn, A);
+    const bool okB = tOut == last.t ? makePoint(last.t, last.bary, last.s, B) : invertAt(tOut, B);
+    if (!okA || !okB) return runBoxOnly();
+    psi_ = Psi::make(F_, O_, D_);
+    dvd_ = dirLocal();
+
+    // 2. Monotone pieces.
+    double ts[4];
+    const int ns = monotoneSplits(F_, psi_, O_, D_, tIn, tOut, ts);
+    CurvePoint pts[6];
+    int np = 0;
+    pts[np++] = A;
+    for (int k = 0; k < ns; ++k) {
+      CurvePoint m;
+      if (!invertAt(ts[k], m)) return runBoxOnly();
+      pts[np++] = m;
+      OBLONG_STAT_INC(travTurning);
+    }
+    pts[np++] = B;
+    for (int k = np - 2; k >= 0; --k) pushPiece({pts[k], pts[k + 1]});
+
+    // 3. Front to back.
+    while (sp_ > 0) {
+      const Entry e = stack()[--sp_];
+      if (e.box) processBox(e);
+      else processPiece(e.piece, splitter);
+    }
+    return hit_.found;
+  }
+
+  const ClosestHit& hit() const { return hit_; }
+
+ private:
+  struct Entry {
+    CurvePiece piece;  // curve mode
+    ivec2 clo, chi;    // box mode: local cell range
+    double ta, tb;     // box mode: ray interval
+    bool box;
+  };
+  static_assert(std::is_trivially_copyable_v<Entry>);
+  // Raw storage: a std::array<Entry> would run 128 default constructors per prism.
+  Entry* stack() { return reinterpret_cast<Entry*>(stackRaw_); }
+
+  double slack(double t) const { return 1e-5 * std::abs(t) + tAbs_; }
+  double bestLimit() const { return hit_.found ? double(hit_.t) + slack(hit_.t) : double(ray_.tmax) + slack(ray_.tmax); }
+
+  void pushPiece(const CurvePiece& p) {
+    Entry* e = new (&stack()[sp_++]) Entry;
+    e->piece = p;
+    e->box = false;
+  }
+  void pushBox(ivec2 lo, ivec2 hi, double ta, double tb) {
+    Entry* e = new (&stack()[sp_++]) Entry;
+    e->box = true;
+    e->clo = lo, e->chi = hi, e->ta = ta, e->tb = tb;
+  }
+
+  // A curve point from prism coordinates (b, s) claimed to be the projection of the ray
+  // point at t. The residual r = G(b, s) − X(t) bounds the error: G is bilinear in
+  // (b, s), so J(b, s_true)·(Δb, Δs) = −r exactly and |Δu| ≤ kb.x |r|, |Δv| ≤ kb.y |r|
+  // while both points stay in the analysed domain.
+  bool makePoint(double t, const dvec2& b, double s, CurvePoint& out) const {
+    const double dom = P_.domainB;
+    if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1 + dom)) return false;
+    if (!(s >= P_.domainS0 && s <= P_.domainS1)) return false;
+    const dvec3 X = O_ + t * D_;
+    const dvec3 G = F_.G(b, s);
+    const double mag = std::max({std::abs(X.x), std::abs(X.y), std::abs(X.z), std::abs(G.x), std::abs(G.y),
+                                 std::abs(G.z)});
+    const double r = glm::length(G - X) + 1e-14 * mag;
+    const dvec2 db = P_.kb * r * 1.001;
+    if (!(db.x + db.y < 0.01) || !(P_.ks * r < 0.01 * (P_.domainS1 - P_.domainS0) + 1e-300)) return false;
+    out.t = t;
+    out.uv = F_.local(b);
+    out.pad = P_.kxy * (r * 1.001) + 1e-9 * (1.0 + glm::abs(out.uv));
+    return std::isfinite(out.uv.x) && std::isfinite(out.uv.y);
+  }
+
+  bool invertAt(double t, CurvePoint& out) {
+    ++c_.inversions;
+    const dvec3 X = O_ + t * D_;
+    const InversionResult r = detail::invert(inv_, vec3(X), T_);
+    const dvec2 b(r.bary);
+    const double nl = glm::length(F_.N(b));
+    if (!(nl > 0) || !std::isfinite(r.h)) {
+      OBLONG_STAT_INC(travBadInversions);
+      return false;
+    }
+    if (!makePoint(t, b, double(r.h) / nl, out)) {
+      OBLONG_STAT_INC(travBadInversions);
+      return false;
+    }
+    return true;
+  }
+
+  // Approximate direction of the curve in local sample coordinates (ordering only).
+  dvec2 dirLocal() const {
+    const dvec3 N = F_.N(dvec2(1.0 / 3.0));
+    const double det = glm::dot(F_.PX, glm::cross(F_.PY, N));
+    if (!(std::abs(det) > 0)) return dvec2(1.0);
+    return {glm::dot(D_, glm::cross(F_.PY, N)) / det, glm::dot(F_.PX, glm::cross(D_, N)) / det};
+  }
+
+  // Local cells touching [lo, hi], clipped to T's cells. False when empty.
+  bool snap(const dvec2& lo, const dvec2& hi, ivec2& clo, ivec2& chi) const {
+    constexpr double lim = 1e9;
+    for (int k = 0; k < 2; ++k) {
+      const double eta = 1e-9 * (1 + std::abs(lo[k]) + std::abs(hi[k]));
+      clo[k] = int(std::clamp(std::floor(lo[k] - eta), -lim, lim));
+      chi[k] = int(std::clamp(std::floor(hi[k] + eta), -lim, lim));
+    }
+    clo = glm::max(clo, cellLo_);
+    chi = glm::min(chi, cellHi_);
+    return clo.x <= chi.x && clo.y <= chi.y;
+  }
+
+  // Ray interval [t0, t1] (clipped in place) through the box of the micro-geometry over
+  // local cells [clo, chi]. False when empty.
+  bool clipToCells(const ivec2& clo, const ivec2& chi, double& t0, double& t1) {
+    const SampleRange sr{clo.x + F_.origin.x, clo.y + F_.origin.y, chi.x + 1 + F_.origin.x,
+                         chi.y + 1 + F_.origin.y};
+    ++c_.rangeQueries;
+    const Interval h = d_.toHeight(detail::rawRange(rq_, sr));
+    const dvec2 lo = glm::max(dvec2(clo), sbLo_), hi = glm::min(dvec2(chi + 1), sbHi_);
+    BoxD box = boxOverRect(F_, double(T_.minNormalLength), lo, hi, h.lo, h.hi, boxPad_);
+    box = box.intersect(prismBox_);
+    ++c_.boxes;
+    if (box.isEmpty()) return false;
+    box.clip(O_, invD_, t0, t1);
+    return t0 <= t1;
+  }
+
+  void testCell(int i, int j) {
+    ++c_.cellsMarched;
+    MicroTriangle buf[MicroCells::kMaxPerCell];
+    if (!cacheReady_) {  // first cell of this ray and triangle
+      new (&cache_) GridVertexCache;
+      cacheReady_ = true;
+    }
+    const int n = mc_.cell(i + F_.origin.x, j + F_.origin.y, buf, cache());
+    c_.microTriangles += n;
+    for (int k = 0; k < n; ++k) hit_.test(wr_, buf[k], ray_.tmin, ray_.tmax);
+  }
+  void testCells(const ivec2& clo, const ivec2& chi) {
+    OBLONG_STAT_INC(travLeaves);
+    // Front to back along the approximate direction (order only matters for ties).
+    const int sx = dvd_.x >= 0 ? 1 : -1, sy = dvd_.y >= 0 ? 1 : -1;
+    for (int j = sy > 0 ? clo.y : chi.y; sy > 0 ? j <= chi.y : j >= clo.y; j += sy)
+      for (int i = sx > 0 ? clo.x : chi.x; sx > 0 ? i <= chi.x : i >= clo.x; i += sx) testCell(i, j);
+  }
+
+  // The minor coordinate range of the monotone piece where its major coordinate is c.
+  void minorAt(const CurvePiece& p, int ax, double c, double& wlo, double& whi) const {
+    const int mi = 1 - ax;
+    const dvec2 lo = p.lo(), hi = p.hi();
+    wlo = std::numeric_limits<double>::infinity(), whi = -wlo;
+    // An endpoint whose major coordinate may be c (within its pad): the sub-arc may
+    // start or end there.
+    for (const CurvePoint* e : {&p.a, &p.b})
+      if (std::abs(c - e->uv[ax]) <= e->pad[ax] * 1.0000001 + 1e-12) {
+        wlo = std::min(wlo, e->uv[mi] - e->pad[mi]);
+        whi = std::max(whi, e->uv[mi] + e->pad[mi]);
+      }
+    double q2, q1, q0, w[2], rp[2];
+    psi_.onLine(ax, c, q2, q1, q0);
+    const int n = quadraticRoots(q2, q1, q0, w, rp);
+    if (n < 0) {  // ψ vanishes on the whole line: the curve may run along it
+      wlo = lo[mi], whi = hi[mi];
+      return;
+    }
+    for (int k = 0; k < n; ++k)
+      if (w[k] >= lo[mi] - rp[k] && w[k] <= hi[mi] + rp[k]) {
+        wlo = std::min(wlo, w[k] - rp[k]);
+        whi = std::max(whi, w[k] + rp[k]);
+      }
+    if (!(wlo <= whi)) wlo = lo[mi], whi = hi[mi];  // lost to rounding: the whole range
+    wlo = std::max(wlo, lo[mi]);
+    whi = std::min(whi, hi[mi]);
+  }
+
+  // Texel marching (§4.4) over the cells within ε of the piece.
+  void march(const CurvePiece& p) {
+    OBLONG_STAT_INC(travLeaves);
+    const dvec2 d = p.b.uv - p.a.uv;
+    const int ax = std::abs(d.x) >= std::abs(d.y) ? 0 : 1, mi = 1 - ax;
+    const dvec2 lo = p.lo(), hi = p.hi();
+    ivec2 clo, chi;
+    if (!snap(lo - eps_, hi + eps_, clo, chi)) return;
+    const int sa = d[ax] >= 0 ? 1 : -1, sm = d[mi] >= 0 ? 1 : -1;
+    for (int k = sa > 0 ? clo[ax] : chi[ax]; sa > 0 ? k <= chi[ax] : k >= clo[ax]; k += sa) {
+      // The piece's points whose major coordinate is within ε of column k.
+      const double c0 = std::max(k - eps_[ax], lo[ax]), c1 = std::min(k + 1 + eps_[ax], hi[ax]);
+      if (c0 > c1) continue;
+      double a0, a1, b0, b1;
+      minorAt(p, ax, c0, a0, a1);
+      minorAt(p, ax, c1, b0, b1);
+      // Monotone: in between, the minor coordinate lies between its values at c0 and c1.
+      const double wlo = std::min(a0, b0) - eps_[mi], whi = std::max(a1, b1) + eps_[mi];
+      const double eta = 1e-9 * (1 + std::abs(wlo) + std::abs(whi));
+      const int j0 = std::max(int(std::floor(wlo - eta)), clo[mi]), j1 = std::min(int(std::floor(whi + eta)), chi[mi]);
+      for (int j = sm > 0 ? j0 : j1; sm > 0 ? j <= j1 : j >= j0; j += sm) {
+        if (ax == 0) testCell(k, j);
+        else testCell(j, k);
+      }
+    }
+  }
+
+  template <typename Split>
+  void processPiece(CurvePiece p, const Split& splitter) {
+    if (p.a.t > bestLimit()) return;
+    dvec2 ext = p.hi() - p.lo();
+    const double ms = opt_.marchingScale;
+    // Pads that dominate the rectangle cannot be split away: march.
+    const dvec2 pads = p.a.pad + p.b.pad;
+    auto small = [&] {
+      const int la = ext.x >= ext.y ? 0 : 1;
+      return ext[la] <= ms || pads[la] > 0.25 * ext[la];
+    };
+    if (small()) return march(p);
+    ivec2 clo, chi;
+    if (!snap(p.lo() - eps_, p.hi() + eps_, clo, chi)) return;
+    double t0 = p.a.t, t1 = std::min(p.b.t, bestLimit());
+    if (!clipToCells(clo, chi, t0, t1)) return;
+    if (opt_.inversionInTraversal) {
+      // Fig. 5a: the clipped ends' projections can give a much smaller rectangle.
+      const double minGain = 1e-3 * (p.b.t - p.a.t);
+      CurvePoint m;
+      if (t0 > p.a.t + minGain && invertAt(t0, m)) p.a = m;
+      if (t1 < p.b.t - minGain && invertAt(t1, m)) p.b = m;
+      ext = p.hi() - p.lo();
+      if (small()) return march(p);
+    }
+    CurvePiece front, back;
+    if (sp_ + 2 > kStack) {
+      OBLONG_STAT_INC(travOverflows);
+      return march(p);  // correct, just not hierarchical
+    }
+    if (!detail::split(splitter, p, *this, front, back)) {
+      OBLONG_STAT_INC(travBoxOnly);
+      pushBox(clo, chi, t0, t1);
+      return;
+    }
+    pushPiece(back);
+    pushPiece(front);
+  }
+
+  void processBox(const Entry& e) {
+    const double limit = bestLimit();
+    if (e.ta > limit) return;
+    const ivec2 n = e.chi - e.clo + 1;
+    if (std::max(n.x, n.y) <= std::max(1.0f, opt_.marchingScale)) return testCells(e.clo, e.chi);
+    double t0 = e.ta, t1 = std::min(e.tb, limit);
+    if (!clipToCells(e.clo, e.chi, t0, t1)) return;
+    if (sp_ + 2 > kStack) {
+      OBLONG_STAT_INC(travOverflows);
+      return testCells(e.clo, e.chi);
+    }
+    const int ax = n.x >= n.y ? 0 : 1;
+    const int mid = e.clo[ax] + (n[ax] - 1) / 2;
+    ivec2 aHi = e.chi, bLo = e.clo;
+    aHi[ax] = mid;
+    bLo[ax] = mid + 1;
+    // Lower half first when the ray runs towards +axis (order matters for speed only).
+    if (dvd_[ax] >= 0) {
+      pushBox(bLo, e.chi, t0, t1);
+      pushBox(e.clo, aHi, t0, t1);
+    } else {
+      pushBox(e.clo, aHi, t0, t1);
+      pushBox(bLo, e.chi, t0, t1);
+    }
+  }
+
+  // Projection-free subdivision of all of T's cells (ill-posed triangles, fallbacks).
+  bool runBoxOnly() {
+    OBLONG_STAT_INC(travBoxOnlyPrisms);
+    double t0 = ray_.tmin - slack(ray_.tmin), t1 = bestLimit();
+    prismBox_.clip(O_, invD_, t0, t1);
+    if (!(t0 <= t1)) return hit_.found;
+    dvd_ = dirLocal();
+    sp_ = 0;
+    pushBox(cellLo_, cellHi_, t0, t1);
+    while (sp_ > 0) {
+      const Entry e = stack()[--sp_];
+      processBox(e);
+    }
+    return hit_.found;
+  }
+
+  const DisplacedTriangle& T_;
+  const PrismParams& P_;
+  const Displacement& d_;
+  const RQ& rq_;
+  const Inv& inv_;
+  const TraversalOptions& opt_;
+  const Ray& ray_;
+  RayCounters& c_;
+  const LocalFrame F_;
+  const MicroCells mc_;
+  const WatertightRay wr_;
+  const dvec3 O_, D_;
+  dvec3 invD_;
+  ivec2 cellLo_, cellHi_;
+  dvec2 sbLo_, sbHi_;
+  double boxPad_ = 0, tAbs_ = 0, extraB_ = 0, extraS_ = 0;
+  dvec2 eps_{0.0};
+  BoxD prismBox_;
+  Psi psi_;
+  dvec2 dvd_{1.0};
+  ClosestHit hit_;
+  int sp_ = 0;
+  alignas(Entry) unsigned char stackRaw_[kStack * sizeof(Entry)];
+  // Micro-vertices shared by neighbouring cells; initialised at the first cell only.
+  bool cacheReady_ = false;
+  alignas(GridVertexCache) unsigned char cache_[sizeof(GridVertexCache)];
+  GridVertexCache& cache() { return *reinterpret_cast<GridVertexCache*>(cache_); }
+};
+
+// Shared part of the traversal intersectors.
+class TraversalIntersectorBase : public Intersector {
+ public:
+  TraversalIntersectorBase(std::string name, TraversalMesh mesh, std::unique_ptr<RangeQuery> rq,
+                           std::unique_ptr<Inverter> inv, std::unique_ptr<Splitter> split, TraversalOptions opt)
+      : name_(std::move(name)),
+        mesh_(std::move(mesh)),
+        rq_(std::move(rq)),
+        inv_(std::move(inv)),
+        split_(std::move(split)),
+        opt_(opt) {}
+  std::string name() const override { return name_; }
+  size_t size() const override { return mesh_.tris.size(); }
+  AABB bounds(uint32_t prim) const override { return mesh_.bounds(prim); }
+  MemoryReport memory() const override {
+    MemoryReport r = rq_->memory();
+    r.push_back({"traversal/triangles", mesh_.bytes()});
+    return r;
+  }
+  const TraversalMesh& mesh() const { return mesh_; }
+
+ protected:
+  std::string name_;
+  TraversalMesh mesh_;
+  std::unique_ptr<RangeQuery> rq_;
+  std::unique_ptr<Inverter> inv_;
+  std::unique_ptr<Splitter> split_;
+  TraversalOptions opt_;
+};
+
+template <typename RQ, typename Inv, typename Split>
+class Traversal final : public TraversalIntersectorBase {
+ public:
+  using TraversalIntersectorBase::TraversalIntersectorBase;
+
+  bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
+    if (!mesh_.params[prim].valid) return false;
+    RayCounters local;
+    local.prisms = 1;
+    const RQ& rq = static_cast<const RQ&>(*rq_);
+    const Inv& inv = static_cast<const Inv&>(*inv_);
+    const Split& split = static_cast<const Split&>(*split_);
+    RayPatch<RQ, Inv> patch(mesh_, prim, rq, inv, opt_, r, local);
+    const bool found = patch.run(split);
+    if (found) patch.hit().fill(hit);
+    flushCounters(local, found, c);
+    return found;
+  }
+};
+
+// What createIntersector hands to the per-range-query instantiation files.
+struct TraversalParts {
+  std::string name;
+  TraversalMesh mesh;
+  std::unique_ptr<RangeQuery> rq;
+  std::unique_ptr<Inverter> inv;
+  std::unique_ptr<Splitter> split;
+  TraversalOptions opt;
+};
+
+template <typename RQ, typename Inv, typename Split>
+std::unique_ptr<Intersector> makeTraversal(TraversalParts&& p) {
+  return std::make_unique<Traversal<RQ, Inv, Split>>(std::move(p.name), std::move(p.mesh), std::move(p.rq),
+                                                     std::move(p.inv), std::move(p.split), p.opt);
+}
+
+// Defined in traversal_<range>.cpp: the six {newton, cubic} × splitter instantiations for
+// one range query, nullptr when the inverter or splitter is not one of the built-in ones.
+std::unique_ptr<Intersector> makeRmipTraversal(TraversalParts&& p);
+std::unique_ptr<Intersector> makeMinMaxMipmapTraversal(TraversalParts&& p);
+std::unique_ptr<Intersector> makeSafetyZonesTraversal(TraversalParts&& p);
+// traversal_generic.cpp: Traversal<RangeQuery, Inverter, Splitter>.
+std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p);
+
+// The baselines sharing the micro-geometry (traversal.cpp).
+std::unique_ptr<Intersector> makeBruteForce(std::vector<DisplacedTriangle> triangles, const Displacement& disp);
+std::unique_ptr<Intersector> makeFixedStep(std::vector<DisplacedTriangle> triangles, const Displacement& disp,
+                                           float step, std::unique_ptr<Inverter> inv);
+
+}  // namespace oblong

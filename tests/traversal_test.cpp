@@ -1,0 +1,624 @@
+// The traversal (issue 4; DESIGN invariants 1, 2, 5): every strategy combination against
+// the brute-force Intersector, per base triangle, on every ray family; the prism and the
+// shell analysis against the micro-geometry; ψ's monotone split; the splitters; the
+// allocation-free MicroCells against forEachMicroTriangle.
+//
+// Conformance: same hit/miss, t within 1e-5 relative (of max(|t|, 1e-3)). Zero
+// mismatches. fixedstep is approximate by design and only checked for sanity. The hidden
+// tag [.large] runs many more rays per family.
+#include "core/microgeometry.h"
+#include "core/procedural.h"
+#include "core/stats.h"
+#include "inversion/ceres.h"
+#include "inversion/newton.h"
+#include "render/intersector.h"
+#include "render/prism.h"
+#include "render/psi.h"
+#include "render/rect_bounds.h"
+#include "render/traversal.h"
+#include "strategies/quadtree.h"
+#include "strategies/splitter.h"
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstring>
+#include <numbers>
+#include <random>
+
+using namespace oblong;
+
+namespace {
+
+struct Scenario {
+  std::string name;
+  std::vector<DisplacedTriangle> tris;
+  Displacement disp;
+};
+
+std::vector<DisplacedTriangle> trianglesOf(const Mesh& m) {
+  std::vector<DisplacedTriangle> t;
+  for (size_t i = 0; i < m.triangles.size(); ++i) t.push_back(m.triangle(i));
+  return t;
+}
+
+Scenario tiledQuad() {  // flat, high-frequency map tiled 4x4: deep hierarchies
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(32, 32, 3));
+  return {"tiled quad", trianglesOf(quadMesh(1.0f, 0.0f, 2)), Displacement{map, 0.1f, -0.5f, vec2(4.0f, 4.0f)}};
+}
+Scenario torus() {  // curved, odd map sizes, tiled (3,2)
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(61, 47, 9));
+  return {"torus", trianglesOf(torusMesh(1.0f, 0.4f, 16, 8)), Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)}};
+}
+Scenario coarseTorus() {  // big curved triangles, strong displacement: large bulge / ε
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(96, 48, 4));
+  return {"coarse torus", trianglesOf(torusMesh(1.0f, 0.45f, 8, 6)), Displacement{map, 0.2f, -0.4f, vec2(2.0f, 1.0f)}};
+}
+Scenario sphere() {  // sphere-like, normals converging to the centre
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 40, 11));
+  return {"sphere", trianglesOf(sphereMesh(1.0f, 12, 8)), Displacement{map, 0.12f, -0.5f, vec2(4.0f, 2.0f)}};
+}
+
+// Stiff cases: strongly twisted vertex normals, a sphere displaced towards its centre
+// (normals converging within the shell), 10x tiling (tens of thousands of cells per
+// triangle), a quad 1e4 away from the origin, and rotated, mirrored, negative uvs.
+Scenario twisted() {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> W(-0.5f, 0.5f);
+  Mesh m = quadMesh(1.0f, 0.0f, 3);
+  for (vec3& n : m.normals) n = glm::normalize(vec3(W(rng), 1.0f, W(rng)));
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(48, 48, 7));
+  return {"twisted", trianglesOf(m), Displacement{map, 0.15f, -0.5f, vec2(2.0f, 2.0f)}};
+}
+Scenario deepSphere() {
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 32, 5));
+  return {"deep sphere", trianglesOf(sphereMesh(1.0f, 10, 6)), Displacement{map, 0.6f, -1.0f, vec2(2.0f, 1.0f)}};
+}
+Scenario highTiling() {
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(23, 19, 8));
+  return {"10x tiling", trianglesOf(quadMesh(1.0f, 0.0f, 1)), Displacement{map, 0.03f, -0.5f, vec2(10.0f, 11.0f)}};
+}
+Scenario farAway() {
+  Mesh m = quadMesh(1.0f, 0.0f, 2);
+  for (vec3& p : m.positions) p += vec3(1e4f, -3e3f, 2e4f);
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(32, 32, 6));
+  return {"far from the origin", trianglesOf(m), Displacement{map, 0.1f, -0.5f, vec2(3.0f, 3.0f)}};
+}
+
+Scenario rotatedUVs() {  // mirrored, rotated, negative uvs: the grid is not aligned with T
+  Mesh m = quadMesh(1.0f, 0.0f, 2);
+  const float c = std::cos(0.5f), sn = std::sin(0.5f);
+  for (vec2& uv : m.uvs) uv = vec2(-1.3f + 1.7f * (c * uv.x - sn * uv.y), 0.4f - 1.1f * (sn * uv.x + c * uv.y));
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(29, 35, 12));
+  return {"rotated mirrored uvs", trianglesOf(m), Displacement{map, 0.08f, -0.5f, vec2(2.0f, 3.0f)}};
+}
+
+std::vector<Scenario> scenarios() { return {tiledQuad(), torus(), coarseTorus(), sphere()}; }
+std::vector<Scenario> stiffScenarios() { return {twisted(), deepSphere(), highTiling(), farAway(), rotatedUVs()}; }
+
+TraversalConfig config(const std::string& range, const std::string& inv, const std::string& split) {
+  TraversalConfig c;
+  c.range = range, c.inverter = inv, c.splitter = split;
+  return c;
+}
+
+std::string describe(const TraversalConfig& c) {
+  if (!c.baseline.empty()) return c.baseline;
+  return fmt::format("{}+{}+{} (march {}, inversion {}{}{})", c.range, c.inverter, c.splitter, c.marchingScale,
+                     c.inversionInTraversal ? "on" : "off", c.rangeParams.empty() ? "" : ", range ",
+                     c.rangeParams.empty() ? "" : c.rangeParams.dump());
+}
+
+// Every registered combination, plus the variants that change the traversal's shape.
+std::vector<TraversalConfig> allConfigs() {
+  registerCeresInverter();
+  std::vector<TraversalConfig> out;
+  for (const auto& r : rangeQueryNames())
+    for (const std::string inv : {"newton", "cubic"})
+      for (const auto& s : splitterNames()) out.push_back(config(r, inv, s));
+  TraversalConfig c = config("rmip", "newton", "midpoint2d");
+  c.inversionInTraversal = false;
+  out.push_back(c);
+  c = config("rmip", "newton", "midpoint2d");
+  c.marchingScale = 1.0f;
+  out.push_back(c);
+  c.marchingScale = 0.5f;
+  out.push_back(c);
+  c.marchingScale = 16.0f;
+  out.push_back(c);
+  c = config("minmax_mipmap", "newton", "quadtree");  // the TFDM configuration
+  c.inversionInTraversal = false;
+  c.marchingScale = 1.0f;
+  out.push_back(c);
+  c = config("rmip", "newton", "midpoint2d");
+  c.rangeParams = {{"resolution", 8}, {"compression", 0}};
+  out.push_back(c);
+  c = config("rmip", "ceres", "midpoint2d");  // the generic (virtual) instantiation
+  out.push_back(c);
+  return out;
+}
+
+vec3 randomDir(std::mt19937& rng) {
+  std::normal_distribution<float> G;
+  vec3 d;
+  do d = vec3(G(rng), G(rng), G(rng));
+  while (glm::length(d) < 1e-3f);
+  return glm::normalize(d);
+}
+
+struct SurfacePoint {
+  vec3 p, n;
+  uint32_t prim;
+};
+SurfacePoint randomBasePoint(const Scenario& s, std::mt19937& rng) {
+  std::uniform_int_distribution<size_t> tri(0, s.tris.size() - 1);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  const size_t k = tri(rng);
+  const DisplacedTriangle& T = s.tris[k];
+  float u = U(rng), v = U(rng);
+  if (u + v > 1) u = 1 - u, v = 1 - v;
+  return {T.P(u, v), glm::normalize(T.N(u, v)), uint32_t(k)};
+}
+
+struct RayCase {
+  Ray r;
+  int family;
+};
+const char* kFamilies[] = {"camera", "grazing", "along +-N", "inside the shell", "spawned (path tracer)",
+                           "shadow (finite tmax)"};
+
+// Closest hit over all triangles (AABB-filtered) with a given intersector.
+bool closest(const Intersector& is, const Ray& r, TriangleHit& best) {
+  bool found = false;
+  Ray q = r;
+  RayCounters c;
+  for (uint32_t p = 0; p < is.size(); ++p) {
+    const AABB b = is.bounds(p);
+    if (b.isEmpty() || b.intersect(q).isEmpty()) continue;
+    TriangleHit h;
+    if (is.intersect(q, p, h, c) && h.t <= q.tmax) found = true, best = h, q.tmax = h.t;
+  }
+  return found;
+}
+
+std::vector<RayCase> rayFamilies(const Scenario& s, const Intersector& bf, int count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  AABB box;
+  for (uint32_t p = 0; p < bf.size(); ++p) box.extend(bf.bounds(p));
+  const vec3 c = 0.5f * (box.lo + box.hi);
+  const float diag = glm::length(box.extent());
+  const float hmax = std::max(std::abs(s.disp.scale * s.disp.bias), std::abs(s.disp.scale * (1 + s.disp.bias)));
+  std::vector<RayCase> out;
+  std::vector<Ray> camera;
+  for (int i = 0; i < count; ++i) {
+    {  // camera: from outside towards a random point on the base surface
+      const vec3 o = c + 1.5f * diag * randomDir(rng);
+      const SurfacePoint sp = randomBasePoint(s, rng);
+      const vec3 target = sp.p + (U(rng) - 0.5f) * 2.0f * hmax * sp.n;
+      camera.push_back(Ray{o, glm::normalize(target - o), 0.0f, kInfinity});
+      out.push_back({camera.back(), 0});
+    }
+    {  // grazing: within a few degrees of the tangent plane
+      const SurfacePoint sp = randomBasePoint(s, rng);
+      vec3 t = glm::cross(sp.n, randomDir(rng));
+      if (glm::length(t) < 1e-3f) t = glm::cross(sp.n, vec3(1, 0, 0));
+      const float tilt = (U(rng) - 0.5f) * (i % 2 ? 0.02f : 0.2f);
+      const vec3 d = glm::normalize(glm::normalize(t) + tilt * sp.n);
+      const vec3 target = sp.p + (U(rng) - 0.5f) * 2.0f * hmax * sp.n;
+      out.push_back({Ray{target - 0.6f * diag * d, d, 0.0f, kInfinity}, 1});
+    }
+    {  // along +-N: the interpolated normal itself, from above, below or inside
+      const SurfacePoint sp = randomBasePoint(s, rng);
+      const float side = U(rng) < 0.5f ? 1.0f : -1.0f;
+      const float start = (i % 3 == 0) ? (U(rng) * 2 - 1) * hmax : side * 3.0f * hmax;
+      out.push_back({Ray{sp.p + start * sp.n, -side * sp.n, 0.0f, kInfinity}, 2});
+    }
+    {  // inside the shell, random direction
+      const SurfacePoint sp = randomBasePoint(s, rng);
+      const vec3 o = sp.p + (U(rng) * 2.0f - 1.0f) * 1.2f * hmax * sp.n;
+      out.push_back({Ray{o, randomDir(rng), 0.0f, kInfinity}, 3});
+    }
+  }
+  // Directions that are not unit length (Embree does not normalise) and axis-aligned
+  // ones (slab tests with infinite reciprocals), mixed into the camera family.
+  for (int i = 0; i < count / 4; ++i) {
+    Ray r = camera[size_t(i) % camera.size()];
+    r.d *= (i % 2) ? 7.5f : 0.02f;
+    out.push_back({r, 0});
+    const SurfacePoint sp = randomBasePoint(s, rng);
+    vec3 d(0.0f);
+    d[i % 3] = (i / 3) % 2 ? 1.0f : -1.0f;
+    out.push_back({Ray{sp.p - 2.0f * hmax * d - (0.5f * diag) * d, d, 0.0f, kInfinity}, 0});
+  }
+  // Spawned from the oracle's hits of the camera rays: exactly at the hit with a small
+  // tmin, or offset along the facing normal; into the hemisphere; plus shadow rays
+  // towards a point with a finite tmax.
+  int k = 0;
+  for (const Ray& r : camera) {
+    TriangleHit h;
+    if (!closest(bf, r, h)) continue;
+    vec3 n = h.ng;
+    if (glm::dot(n, r.d) > 0) n = -n;
+    const vec3 p = r.at(h.t);
+    vec3 d = randomDir(rng);
+    if (glm::dot(d, n) < 0) d = -d;
+    const float eps = 1e-4f * std::max(1.0f, glm::length(p));
+    if (k++ % 2) out.push_back({Ray{p + eps * n, d, 0.0f, kInfinity}, 4});
+    else out.push_back({Ray{p, d, eps, kInfinity}, 4});
+    const vec3 light = c + 1.2f * diag * randomDir(rng);
+    const vec3 L = light - p;
+    out.push_back({Ray{p + eps * n, glm::normalize(L), 0.0f, glm::length(L) * (0.3f + 0.7f * U(rng))}, 5});
+  }
+  return out;
+}
+
+// Brute-force results per (ray, triangle) whose prism box the ray meets.
+struct Reference {
+  uint32_t ray, prim;
+  bool hit;
+  float t;
+};
+std::vector<Reference> reference(const Intersector& bf, const std::vector<RayCase>& rays) {
+  std::vector<Reference> out;
+  RayCounters c;
+  for (uint32_t i = 0; i < rays.size(); ++i)
+    for (uint32_t p = 0; p < bf.size(); ++p) {
+      AABB b = bf.bounds(p);
+      if (b.isEmpty()) continue;
+      const vec3 e = 1e-4f * (b.extent() + vec3(1.0f));  // generous: this only filters
+      b.lo -= e, b.hi += e;
+      if (b.intersect(rays[i].r).isEmpty()) continue;
+      TriangleHit h;
+      const bool hit = bf.intersect(rays[i].r, p, h, c);
+      out.push_back({i, p, hit, hit ? h.t : 0.0f});
+    }
+  return out;
+}
+
+bool sameT(float a, float b) { return std::abs(a - b) <= 1e-5f * std::max(std::abs(a), 1e-3f); }
+
+struct Outcome {
+  size_t pairs = 0, hits = 0, mismatches = 0;
+  std::string first;
+  RayCounters counters;
+  double seconds = 0;
+};
+
+Outcome conformance(const Intersector& is, const std::vector<RayCase>& rays, const std::vector<Reference>& ref) {
+  Outcome o;
+  const auto start = std::chrono::steady_clock::now();
+  for (const Reference& x : ref) {
+    const Ray& r = rays[x.ray].r;
+    TriangleHit h;
+    const bool hit = is.intersect(r, x.prim, h, o.counters);
+    ++o.pairs;
+    o.hits += x.hit;
+    if (hit == x.hit && (!hit || sameT(h.t, x.t))) continue;
+    if (o.mismatches++ == 0)
+      o.first = fmt::format(
+          "family '{}', ray {} o=({:.9g},{:.9g},{:.9g}) d=({:.9g},{:.9g},{:.9g}) t=[{:.9g},{:.9g}], triangle {}: "
+          "bruteforce {} t={:.9g}, traversal {} t={:.9g}",
+          kFamilies[rays[x.ray].family], x.ray, r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax, x.prim,
+          x.hit ? "hit" : "miss", x.t, hit ? "hit" : "miss", h.t);
+  }
+  o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return o;
+}
+
+void runConformance(const std::vector<Scenario>& list, int count, bool verbose) {
+  const auto configs = allConfigs();
+  for (const Scenario& s : list) {
+    TraversalConfig bfc;
+    bfc.baseline = "bruteforce";
+    const auto bf = createIntersector(bfc, s.tris, s.disp);
+    const auto rays = rayFamilies(s, *bf, count, 17);
+    const auto ref = reference(*bf, rays);
+    size_t hits = 0;
+    for (const auto& x : ref) hits += x.hit;
+    INFO(fmt::format("{}: {} rays, {} (ray, triangle) pairs, {} brute-force hits", s.name, rays.size(), ref.size(),
+                     hits));
+    REQUIRE(hits > ref.size() / 20);  // the families do hit the surface
+    const auto t0 = std::chrono::steady_clock::now();
+    for (const TraversalConfig& c : configs) {
+      const auto is = createIntersector(c, s.tris, s.disp);
+      const Outcome o = conformance(*is, rays, ref);
+      if (verbose)
+        fmt::print("  {:<14} {:<60} {:>7} pairs {:>6} hits {:>8.2f} us/pair  steps/pair {:.1f}  mismatches {}\n",
+                   s.name, describe(c), o.pairs, o.hits, 1e6 * o.seconds / std::max<size_t>(o.pairs, 1),
+                   double(o.counters.steps()) / std::max<size_t>(o.pairs, 1), o.mismatches);
+      INFO(s.name << " / " << describe(c) << ": " << o.mismatches << " mismatches of " << o.pairs << "; first: "
+                  << o.first);
+      CHECK(o.mismatches == 0);
+    }
+    if (verbose)
+      fmt::print("  {}: {:.2f} s for all configurations\n", s.name,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+}
+
+}  // namespace
+
+TEST_CASE("every strategy combination matches the brute force per triangle", "[traversal][conformance]") {
+  runConformance(scenarios(), 60, false);
+}
+
+TEST_CASE("every strategy combination matches the brute force on stiff cases", "[traversal][conformance]") {
+  runConformance(stiffScenarios(), 12, getenv("OBLONG_VERBOSE") != nullptr);
+}
+
+TEST_CASE("every strategy combination matches the brute force per triangle (large)", "[traversal][.large]") {
+  runConformance(scenarios(), 3000, true);
+  runConformance(stiffScenarios(), 600, true);
+}
+
+TEST_CASE("the named splitters are registered and validate their parameters",
+          "[traversal][midpoint2d][midpoint3d][quadtree]") {
+  const auto names = splitterNames();
+  for (const std::string n : {"midpoint2d", "midpoint3d", "quadtree"}) {
+    CHECK(std::find(names.begin(), names.end(), n) != names.end());
+    CHECK(createSplitter(n)->name() == n);
+  }
+  CHECK_THROWS_WITH(createSplitter("bisect"), Catch::Contains("unknown strategy 'bisect'"));
+  ParamSet ps(nlohmann::json{{"depth", 3}}, "test: strategies.splitter");
+  CHECK_THROWS_WITH(createSplitter("midpoint2d", ps), Catch::Contains("unknown parameter 'depth'"));
+  // Unknown names of every kind fail when the intersector is built.
+  const Scenario s = tiledQuad();
+  CHECK_THROWS_WITH(createIntersector(config("rmip", "newton", "bisect"), s.tris, s.disp),
+                    Catch::Contains("bisect"));
+  TraversalConfig bad = config("rmip", "newton", "midpoint2d");
+  bad.marchingScale = 0;
+  CHECK_THROWS_WITH(createIntersector(bad, s.tris, s.disp), Catch::Contains("marching scale"));
+  bad = config("rmip", "newton", "midpoint2d");
+  bad.baseline = "tessellated";
+  CHECK_THROWS_WITH(createIntersector(bad, s.tris, s.disp), Catch::Contains("unknown baseline"));
+}
+
+TEST_CASE("quadtree splits on the coarsest node-aligned grid line", "[traversal][quadtree]") {
+  CHECK(Quadtree::alignedSplit(3.2, 9.7) == 8.0);
+  CHECK(Quadtree::alignedSplit(-5.0, 3.0) == 0.0);
+  CHECK(Quadtree::alignedSplit(17.5, 18.5) == 18.0);
+  CHECK(std::isnan(Quadtree::alignedSplit(4.2, 4.8)));
+}
+
+TEST_CASE("intersectors report names, bounds and memory", "[traversal]") {
+  const Scenario s = torus();
+  const auto is = createIntersector(config("safety_zones", "cubic", "quadtree"), s.tris, s.disp);
+  CHECK(is->name() == "safety_zones+cubic+quadtree");
+  CHECK(is->size() == s.tris.size());
+  const MemoryReport m = is->memory();
+  CHECK(totalBytes(m) > 0);
+  bool tri = false;
+  for (const auto& item : m) tri = tri || item.name == "traversal/triangles";
+  CHECK(tri);
+  TraversalConfig c;
+  c.baseline = "bruteforce";
+  CHECK(createIntersector(c, s.tris, s.disp)->name() == "bruteforce");
+  c.baseline = "fixedstep";
+  CHECK(createIntersector(c, s.tris, s.disp)->name() == "fixedstep");
+  // Statistics carry the traversal/ prefix.
+  Stats::reset();
+  RayCounters rc;
+  TriangleHit h;
+  const Ray r{vec3(0, 2, 1.4f), glm::normalize(vec3(0, -1, 0)), 0, kInfinity};
+  for (uint32_t p = 0; p < is->size(); ++p) is->intersect(r, p, h, rc);
+#if OBLONG_STATS
+  const auto snap = Stats::snapshot();
+  CHECK(snap.at("traversal/Prisms") == rc.prisms);
+  CHECK(snap.at("traversal/Boxes") == rc.boxes);
+#endif
+}
+
+TEST_CASE("MicroCells gives forEachMicroTriangle's triangles bit for bit", "[traversal][microgeometry]") {
+  for (const Scenario& s : {torus(), tiledQuad()}) {
+    for (size_t k = 0; k < s.tris.size(); k += 7) {
+      const DisplacedTriangle& T = s.tris[k];
+      std::vector<MicroTriangle> a, b;
+      forEachMicroTriangle(T, s.disp, [&](const MicroTriangle& m) { a.push_back(m); });
+      const MicroCells mc(T, s.disp);
+      const CellRange r = cellsOverlapping(T, s.disp);
+      MicroTriangle buf[MicroCells::kMaxPerCell];
+      for (int j = r.y0; j <= r.y1; ++j)
+        for (int i = r.x0; i <= r.x1; ++i) {
+          const int n = mc.cell(i, j, buf);
+          b.insert(b.end(), buf, buf + n);
+        }
+      REQUIRE(a.size() == b.size());
+      CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(MicroTriangle)) == 0);
+    }
+  }
+}
+
+TEST_CASE("prisms contain the micro-geometry and the shell analysis bounds bulge and projection",
+          "[traversal][prism]") {
+  const Newton newtonD;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (const Scenario& s : scenarios()) {
+    TraversalConfig bfc;
+    bfc.baseline = "bruteforce";
+    const auto bf = createIntersector(bfc, s.tris, s.disp);
+    const float delta = maxCellDelta(*s.disp.map);
+    size_t wellPosed = 0, outsideExact = 0, points = 0;
+    double maxEps = 0;
+    for (size_t k = 0; k < s.tris.size(); ++k) {
+      const DisplacedTriangle& T = s.tris[k];
+      const AABB box = bf->bounds(uint32_t(k));
+      const auto micro = microTriangles(T, s.disp);
+      // Heights as the traversal's prism gets them (exact over T's snapped uv box).
+      Interval h;
+      for (const auto& m : micro)
+        for (const auto& v : m.v) h.extend(s.disp.micro(v.uv));
+      for (const auto& m : micro)
+        for (const auto& v : m.v) REQUIRE(box.contains(v.p));
+      const PrismParams P = analyzeShell(T, s.disp, h, delta);
+      REQUIRE(P.valid);
+      if (!P.wellPosed) continue;
+      ++wellPosed;
+      const LocalFrame F = LocalFrame::make(T, s.disp);
+      maxEps = std::max({maxEps, P.eps.x, P.eps.y});
+      // Points of micro-triangles (vertices and random interior points): their preimage
+      // lies in T_δ × [a − Δs, b + Δs] and within ε of their cell.
+      for (size_t i = 0; i < micro.size(); i += 3) {
+        const MicroTriangle& m = micro[i];
+        const dvec2 s0 = s.disp.toSample(m.v[0].uv), s1 = s.disp.toSample(m.v[1].uv), s2 = s.disp.toSample(m.v[2].uv);
+        const dvec2 cell = glm::floor((s0 + s1 + s2) / 3.0);
+        for (int q = 0; q < 4; ++q) {
+          double l1 = U(rng), l2 = U(rng);
+          if (l1 + l2 > 1) l1 = 1 - l1, l2 = 1 - l2;
+          if (q == 0) l1 = l2 = 0;
+          const dvec3 X = (1 - l1 - l2) * dvec3(m.v[0].p) + l1 * dvec3(m.v[1].p) + l2 * dvec3(m.v[2].p);
+          const InversionResultD r = newtonD.invertD(X, T);
+          REQUIRE(r.converged);
+          const double sv = r.h / glm::length(F.N(r.bary));
+          const double dT = P.inflateB + 1e-9, dS = P.inflateS + 1e-9 * (1 + std::abs(sv));
+          ++points;
+          if (r.outside() > 1e-7 || sv < P.a - 1e-7 || sv > P.b + 1e-7) ++outsideExact;
+          INFO(s.name << " triangle " << k << " point " << X.x << "," << X.y << "," << X.z);
+          CHECK(r.outside() <= dT);
+          CHECK(sv >= P.a - dS);
+          CHECK(sv <= P.b + dS);
+          const dvec2 loc = F.local(r.bary) + dvec2(F.origin);
+          CHECK(loc.x >= cell.x - P.eps.x - 1e-6);
+          CHECK(loc.x <= cell.x + 1 + P.eps.x + 1e-6);
+          CHECK(loc.y >= cell.y - P.eps.y - 1e-6);
+          CHECK(loc.y <= cell.y + 1 + P.eps.y + 1e-6);
+        }
+      }
+    }
+    INFO(s.name);
+    CHECK(wellPosed == s.tris.size());
+    UNSCOPED_INFO(fmt::format("{}: {} of {} micro-triangle points lie outside the exact prism; max eps {:.3g} texels",
+                              s.name, outsideExact, points, maxEps));
+  }
+}
+
+TEST_CASE("the ray's curve is monotone between the turning points", "[traversal][psi]") {
+  const Newton inv;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  // Twisted normals (a quadratic ψ); the sphere's central normals make ψ linear (the
+  // projection of a line through the centre onto a flat triangle is a line), so it is
+  // not used here.
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(40, 40, 2));
+  Scenario s{"twisted", {}, Displacement{map, 0.1f, -0.5f, vec2(1.0f)}};
+  for (int k = 0; k < 20; ++k) {
+    std::uniform_real_distribution<float> W(-0.6f, 0.6f);
+    DisplacedTriangle T;
+    T.p[0] = vec3(0, 0, 0), T.p[1] = vec3(1, 0, 0), T.p[2] = vec3(0.3f, 1, 0);
+    for (int i = 0; i < 3; ++i) T.n[i] = glm::normalize(vec3(W(rng), W(rng), 1.0f));
+    T.t[0] = vec2(0.1f, 0.1f), T.t[1] = vec2(0.9f, 0.15f), T.t[2] = vec2(0.3f, 0.9f);
+    if (T.prepare()) s.tris.push_back(T);
+  }
+  int splits = 0, checked = 0;
+  for (int iter = 0; iter < 400; ++iter) {
+    const SurfacePoint sp = randomBasePoint(s, rng);
+    const DisplacedTriangle& T = s.tris[sp.prim];
+    const LocalFrame F = LocalFrame::make(T, s.disp);
+    // A ray through the shell near the point, any direction (half of them grazing).
+    vec3 dir = randomDir(rng);
+    if (iter % 2) dir = glm::normalize(dir - 0.95f * glm::dot(dir, sp.n) * sp.n);
+    const dvec3 O = dvec3(sp.p + 0.02f * sp.n - 2.0f * dir), D(dir);
+    const Psi psi = Psi::make(F, O, D);
+    const Prism pr = Prism::exact(T, -0.1, 0.1);
+    Prism::Crossing a, b;
+    if (pr.crossings(O, D, a, b) < 2) continue;
+    double ts[4];
+    const int n = monotoneSplits(F, psi, O, D, a.t, b.t, ts);
+    splits += n;
+    double cuts[6] = {a.t};
+    int nc = 1;
+    for (int k = 0; k < n; ++k) cuts[nc++] = ts[k];
+    cuts[nc++] = b.t;
+    for (int k = 0; k + 1 < nc; ++k) {
+      // Sample the projection densely: both coordinates monotone on each piece, and ψ ≈ 0.
+      dvec2 prev(0.0);
+      int sx = 0, sy = 0;
+      for (int q = 0; q <= 64; ++q) {
+        const double t = cuts[k] + (cuts[k + 1] - cuts[k]) * q / 64.0;
+        const InversionResultD r = inv.invertFastD(O + t * D, T);
+        const dvec2 p = F.local(r.bary);
+        CHECK(std::abs(psi.eval(p)) <= 1e-8 * (1 + glm::length(O)));
+        if (q > 0) {
+          const dvec2 d = p - prev;
+          const double tol = 1e-9 * (1 + glm::length(p));
+          if (std::abs(d.x) > tol) {
+            const int sgn = d.x > 0 ? 1 : -1;
+            CHECK((sx == 0 || sx == sgn));
+            sx = sgn;
+          }
+          if (std::abs(d.y) > tol) {
+            const int sgn = d.y > 0 ? 1 : -1;
+            CHECK((sy == 0 || sy == sgn));
+            sy = sgn;
+          }
+        }
+        prev = p;
+      }
+      ++checked;
+    }
+  }
+  CHECK(checked > 100);
+  CHECK(splits > 0);  // some rays do turn
+}
+
+TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "[traversal][prism]") {
+  std::mt19937 rng(7);
+  for (const Scenario& s : {coarseTorus(), sphere()}) {
+    const float delta = maxCellDelta(*s.disp.map);
+    for (size_t k = 0; k < s.tris.size(); k += 5) {
+      const DisplacedTriangle& T = s.tris[k];
+      const LocalFrame F = LocalFrame::make(T, s.disp);
+      const CellRange cr = cellsOverlapping(T, s.disp);
+      const auto micro = microTriangles(T, s.disp);
+      Interval hT;
+      for (const auto& m : micro)
+        for (const auto& v : m.v) hT.extend(s.disp.micro(v.uv));
+      const PrismParams P = analyzeShell(T, s.disp, hT, delta);
+      for (int q = 0; q < 20; ++q) {
+        std::uniform_int_distribution<int> X(cr.x0, cr.x1), Y(cr.y0, cr.y1);
+        int x0 = X(rng), x1 = X(rng), y0 = Y(rng), y1 = Y(rng);
+        if (x0 > x1) std::swap(x0, x1);
+        if (y0 > y1) std::swap(y0, y1);
+        // Heights over the cells' corners (exact).
+        Interval h;
+        for (int j = y0; j <= y1 + 1; ++j)
+          for (int i = x0; i <= x1 + 1; ++i) h.extend(s.disp.sampleHeight(i, j));
+        const dvec2 sb0 = s.disp.toSample(T.uvBox.lo) - dvec2(F.origin), sb1 = s.disp.toSample(T.uvBox.hi) - dvec2(F.origin);
+        const dvec2 lo = glm::max(dvec2(x0, y0) - dvec2(F.origin), sb0);
+        const dvec2 hi = glm::min(dvec2(x1 + 1, y1 + 1) - dvec2(F.origin), sb1);
+        const BoxD box = boxOverRect(F, T.minNormalLength, lo, hi, h.lo, h.hi, P.vertexErr);
+        forEachMicroTriangle(T, s.disp, CellRange{x0, y0, x1, y1}, [&](const MicroTriangle& m) {
+          for (const auto& v : m.v) {
+            const dvec3 p(v.p);
+            INFO(s.name << " triangle " << k << " cells " << x0 << ".." << x1 << " x " << y0 << ".." << y1);
+            CHECK((p.x >= box.lo.x && p.y >= box.lo.y && p.z >= box.lo.z && p.x <= box.hi.x && p.y <= box.hi.y &&
+                   p.z <= box.hi.z));
+          }
+        });
+      }
+    }
+  }
+}
+
+TEST_CASE("fixedstep approximates the surface", "[traversal][fixedstep]") {
+  const Scenario s = tiledQuad();
+  TraversalConfig c;
+  c.baseline = "bruteforce";
+  const auto bf = createIntersector(c, s.tris, s.disp);
+  c.baseline = "fixedstep";
+  c.fixedStep = 0.002f;
+  const auto fs = createIntersector(c, s.tris, s.disp);
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> U(-0.9f, 0.9f);
+  int agree = 0, n = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Ray r{vec3(U(rng), 1.0f, U(rng)), glm::normalize(vec3(0.3f * U(rng), -1.0f, 0.3f * U(rng))), 0, kInfinity};
+    TriangleHit a, b;
+    const bool ha = closest(*bf, r, a), hb = closest(*fs, r, b);
+    ++n;
+    if (ha == hb && (!ha || std::abs(a.t - b.t) < 0.01f)) ++agree;
+  }
+  CHECK(agree >= n * 9 / 10);
+}
