@@ -128,6 +128,24 @@ std::string EmbreeScene::geometryName() const { return tessellate_ ? "tessellate
 
 EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
     : embreeBytes_(std::make_shared<std::atomic<int64_t>>(0)), tessellate_(opts.tessellate) {
+  // A constructor that throws runs no destructor: release the device here (a bad
+  // strategy name must not leak Embree's allocations).
+  try {
+    build(scene, opts);
+  } catch (...) {
+    release();
+    throw;
+  }
+}
+
+void EmbreeScene::release() {
+  if (scene_) rtcReleaseScene(scene_);
+  if (device_) rtcReleaseDevice(device_);
+  scene_ = nullptr;
+  device_ = nullptr;
+}
+
+void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
   const auto start = std::chrono::steady_clock::now();
   device_ = rtcNewDevice(nullptr);
   if (!device_) throw Error("embree: cannot create device");
@@ -197,10 +215,7 @@ EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
   buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-EmbreeScene::~EmbreeScene() {
-  if (scene_) rtcReleaseScene(scene_);
-  if (device_) rtcReleaseDevice(device_);
-}
+EmbreeScene::~EmbreeScene() { release(); }
 
 Hit EmbreeScene::intersect(const Ray& r, RayCounters* counters) const {
   Context ctx;

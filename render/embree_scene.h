@@ -62,6 +62,9 @@ class EmbreeScene {
     std::vector<uint32_t> basePrim;   // micro-triangle -> base triangle (displaced only)
     std::unique_ptr<Intersector> intersector;  // displaced meshes as user geometry
   };
+  void build(const Scene& scene, const AccelOptions& opts);
+  void release();
+
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   std::vector<std::unique_ptr<Geometry>> geoms_;  // indexed by Embree geometry id

@@ -30,8 +30,8 @@ cmake --build "$build" -j "${JOBS:-2}" --target $targets
 mkdir -p "$build/artifacts"
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
-# Leaks inside Debian's libassimp are known and not ours (tests/fuzz/lsan.supp).
-export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/tests/fuzz/lsan.supp:print_suppressions=0}"
+# Leaks inside Debian's libassimp are known and not ours (tests/lsan.supp).
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/tests/lsan.supp:print_suppressions=0}"
 status=0
 for t in $targets; do
   corpus="$build/corpus_$t"

@@ -1,6 +1,6 @@
 // Traversal targets (issue 4): primary rays on a scene, single thread, for the
 // canonical configuration (rmip + newton + midpoint2d), the TFDM configuration
-// (minmax_mipmap + quadtree, no inversion) and the pre-tessellated Embree scene, side by
+// (minmax_mipmap + quadtree, no inversion, marching scale 1) and the pre-tessellated Embree scene, side by
 // side in one run. Counters: Mrays/s (per core), steps per ray (boxes + marched cells,
 // as the RMIP paper counts them), acceleration-structure memory (MB).
 //
@@ -59,6 +59,7 @@ std::vector<Config> configs() {
   tfdm.traversal.range = "minmax_mipmap";
   tfdm.traversal.splitter = "quadtree";
   tfdm.traversal.inversionInTraversal = false;
+  tfdm.traversal.marchingScale = 1.0f;  // TFDM descends to single texels
   c.push_back({"tfdm", tfdm});
   AccelOptions tess;
   tess.tessellate = true;
