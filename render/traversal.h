@@ -61,11 +61,45 @@ OBLONG_STAT_COUNTER("traversal/IllPosedTriangles", travIllPosed);
 OBLONG_STAT_COUNTER("traversal/RejectedInversions", travBadInversions);
 OBLONG_STAT_COUNTER("traversal/StackOverflows", travOverflows);
 
+inline double maxAbsVertex(const DisplacedTriangle& T) {
+  double m = 0;
+  for (int k = 0; k < 3; ++k)
+    m = std::max({m, std::abs(double(T.p[k].x)), std::abs(double(T.p[k].y)), std::abs(double(T.p[k].z))});
+  return m;
+}
+
+// Margins for the watertight micro-triangle test's own rounding (a few ulps of |p − o|)
+// for rays whose origin has max-norm at most maxO: the boxes and the inflated prism must
+// hold the triangle as that test sees it.
+struct RayMargins {
+  double rayErr, boxPad, extraB, extraS;
+  static RayMargins make(const PrismParams& P, double maxP, double maxO) {
+    RayMargins m;
+    m.rayErr = 1e-6 * (maxP + maxO + std::abs(P.a) + std::abs(P.b));
+    m.boxPad = P.vertexErr + m.rayErr;
+    m.extraB = (P.kb.x + P.kb.y) * 2 * m.rayErr;
+    m.extraS = P.ks * 2 * m.rayErr;
+    return m;
+  }
+  Prism prism(const LocalFrame& F, const PrismParams& P) const {
+    return Prism::inflated(F, P.a - P.inflateS - extraS, P.b + P.inflateS + extraS, P.inflateB + extraB);
+  }
+};
+
 // Everything a displaced mesh's intersector shares, whatever the strategies.
 struct TraversalMesh {
   std::vector<DisplacedTriangle> tris;
   std::vector<PrismParams> params;
   std::vector<CellRange> cells;  // cellsOverlapping(T) per triangle
+  // Per-ray work that does not depend on the ray, done once per triangle: the local
+  // frame, and the inflated prism and exact-prism box padded for the watertight test's
+  // rounding of any ray whose origin lies within `originBudget` (max-norm) — a larger
+  // pad is still conservative. Rays from farther away rebuild them (RayPatch).
+  std::vector<LocalFrame> frames;
+  std::vector<Prism> prisms;
+  std::vector<BoxD> prismBoxes;     // exact prism box, padded
+  std::vector<BoxD> inflatedBoxes;  // inflated prism box, padded
+  std::vector<double> originBudget;
   Displacement disp;
   float cellDelta = 0;  // maxCellDelta(map)
 
@@ -74,7 +108,9 @@ struct TraversalMesh {
   void build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights);
   size_t bytes() const {
     return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
-           cells.capacity() * sizeof(CellRange);
+           cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
+           prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
+           originBudget.capacity() * sizeof(double);
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
@@ -90,11 +126,27 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
   cellDelta = maxCellDelta(*d.map);
   params.resize(tris.size());
   cells.resize(tris.size());
+  frames.resize(tris.size());
+  prisms.resize(tris.size());
+  prismBoxes.resize(tris.size());
+  inflatedBoxes.resize(tris.size());
+  originBudget.assign(tris.size(), -1.0);
   for (size_t i = 0; i < tris.size(); ++i) {
     const DisplacedTriangle& T = tris[i];
     cells[i] = cellsOverlapping(T, d);
     const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
     params[i] = ok ? analyzeShell(T, d, heights(T), cellDelta) : PrismParams{};
+    if (!params[i].valid) continue;
+    frames[i] = LocalFrame::make(T, d);
+    // Origins up to 16 times the triangle's own extent from the world origin (plus 16).
+    const double maxP = maxAbsVertex(T), ab = std::abs(params[i].a) + std::abs(params[i].b);
+    originBudget[i] = 16 * (maxP + ab) + 16;
+    const RayMargins m = RayMargins::make(params[i], maxP, originBudget[i]);
+    prisms[i] = m.prism(frames[i], params[i]);
+    prismBoxes[i] = Prism::exact(T, params[i].a, params[i].b).bounds();
+    prismBoxes[i].pad(m.boxPad);
+    inflatedBoxes[i] = prisms[i].bounds();
+    inflatedBoxes[i].pad(m.boxPad);
   }
 }
 
@@ -183,8 +235,7 @@ class RayPatch final : public SplitContext {
         opt_(opt),
         ray_(ray),
         c_(counters),
-        F_(LocalFrame::make(T_, d_)),
-        mc_(T_, d_),
+        F_(mesh.frames[prim]),
         wr_(ray),
         O_(ray.o),
         D_(ray.d) {
@@ -195,22 +246,30 @@ class RayPatch final : public SplitContext {
     const dvec2 s0 = d_.toSample(T_.uvBox.lo), s1 = d_.toSample(T_.uvBox.hi);
     sbLo_ = s0 - dvec2(F_.origin);
     sbHi_ = s1 - dvec2(F_.origin);
-    // Rounding of the watertight test itself (a few ulps of |p - o|): the boxes and the
-    // inflated prism must hold the triangle as that test sees it.
-    double maxP = 0;
-    for (int k = 0; k < 3; ++k)
-      maxP = std::max({maxP, std::abs(double(T_.p[k].x)), std::abs(double(T_.p[k].y)), std::abs(double(T_.p[k].z))});
+    // Rounding of the watertight test itself (RayMargins). Within the origin budget the
+    // precomputed prism and boxes (padded for the budget) serve; beyond it, rebuilt.
     const double maxO = std::max({std::abs(O_.x), std::abs(O_.y), std::abs(O_.z)});
-    const double rayErr = 1e-6 * (maxP + maxO + std::abs(P_.a) + std::abs(P_.b));
-    boxPad_ = P_.vertexErr + rayErr;
-    const double dl = glm::length(D_);
+    const double budget = mesh.originBudget[prim];
+    const bool pre = maxO <= budget;
+    // This ray's own margins: the dilation ε and the pads of the boxes built per step
+    // (a budget-sized rayErr would widen ε by a tenth of a texel on the asteroid).
+    const RayMargins m = RayMargins::make(P_, maxAbsVertex(T_), maxO);
+    boxPad_ = m.boxPad;
     // Slack for comparing float hit distances with double interval ends.
-    tAbs_ = 8 * boxPad_ / dl;
-    eps_ = P_.eps + P_.kxy * (2 * rayErr);
-    extraB_ = (P_.kb.x + P_.kb.y) * 2 * rayErr;
-    extraS_ = P_.ks * 2 * rayErr;
-    prismBox_ = Prism::exact(T_, P_.a, P_.b).bounds();
-    prismBox_.pad(boxPad_);
+    tAbs_ = 8 * boxPad_ / glm::length(D_);
+    eps_ = P_.eps + P_.kxy * (2 * m.rayErr);
+    if (pre) {
+      prism_ = &mesh.prisms[prim];
+      prismBox_ = mesh.prismBoxes[prim];
+      inflatedBox_ = mesh.inflatedBoxes[prim];
+    } else {
+      ownPrism_ = m.prism(F_, P_);
+      prism_ = &ownPrism_;
+      prismBox_ = Prism::exact(T_, P_.a, P_.b).bounds();
+      prismBox_.pad(boxPad_);
+      inflatedBox_ = ownPrism_.bounds();
+      inflatedBox_.pad(boxPad_);
+    }
   }
 
   // --- SplitContext -------------------------------------------------------------------
@@ -247,11 +306,9 @@ class RayPatch final : public SplitContext {
       OBLONG_STAT_INC(travIllPosed);
       return runBoxOnly();
     }
-    // 1. Inflated prism (per-ray margin for the watertight test's rounding).
-    const Prism prism = Prism::inflated(F_, P_.a - P_.inflateS - extraS_, P_.b + P_.inflateS + extraS_,
-                                        P_.inflateB + extraB_);
-    BoxD pbox = prism.bounds();
-    pbox.pad(boxPad_);
+    // 1. Inflated prism (with the margin for the watertight test's rounding).
+    const Prism& prism = *prism_;
+    const BoxD& pbox = inflatedBox_;
     double t0 = ray_.tmin - slack(ray_.tmin), t1 = ray_.tmax + slack(ray_.tmax);
     pbox.clip(O_, invD_, t0, t1);
     if (!(t0 <= t1)) return false;
@@ -405,7 +462,11 @@ class RayPatch final : public SplitContext {
       new (&cache_) GridVertexCache;
       cacheReady_ = true;
     }
-    const int n = mc_.cell(i + F_.origin.x, j + F_.origin.y, buf, cache());
+    if (!cellsReady_) {  // built at the first cell: most prisms entered march no cell
+      new (&mcRaw_) MicroCells(T_, d_);
+      cellsReady_ = true;
+    }
+    const int n = cells().cell(i + F_.origin.x, j + F_.origin.y, buf, cache());
     c_.microTriangles += n;
     for (int k = 0; k < n; ++k) hit_.test(wr_, buf[k], ray_.tmin, ray_.tmax);
   }
@@ -562,16 +623,17 @@ class RayPatch final : public SplitContext {
   const TraversalOptions& opt_;
   const Ray& ray_;
   RayCounters& c_;
-  const LocalFrame F_;
-  const MicroCells mc_;
+  const LocalFrame& F_;
   const WatertightRay wr_;
   const dvec3 O_, D_;
   dvec3 invD_;
   ivec2 cellLo_, cellHi_;
   dvec2 sbLo_, sbHi_;
-  double boxPad_ = 0, tAbs_ = 0, extraB_ = 0, extraS_ = 0;
+  double boxPad_ = 0, tAbs_ = 0;
   dvec2 eps_{0.0};
-  BoxD prismBox_;
+  const Prism* prism_ = nullptr;
+  Prism ownPrism_;
+  BoxD prismBox_, inflatedBox_;
   Psi psi_;
   dvec2 dvd_{1.0};
   ClosestHit hit_;
@@ -581,6 +643,10 @@ class RayPatch final : public SplitContext {
   bool cacheReady_ = false;
   alignas(GridVertexCache) unsigned char cache_[sizeof(GridVertexCache)];
   GridVertexCache& cache() { return *reinterpret_cast<GridVertexCache*>(cache_); }
+  bool cellsReady_ = false;
+  static_assert(std::is_trivially_destructible_v<MicroCells>);
+  alignas(MicroCells) unsigned char mcRaw_[sizeof(MicroCells)];
+  const MicroCells& cells() const { return *reinterpret_cast<const MicroCells*>(mcRaw_); }
 };
 
 // Shared part of the traversal intersectors.

@@ -231,6 +231,10 @@ std::vector<RayCase> rayFamilies(const Scenario& s, const Intersector& bf, int c
     vec3 d(0.0f);
     d[i % 3] = (i / 3) % 2 ? 1.0f : -1.0f;
     out.push_back({Ray{sp.p - 2.0f * hmax * d - (0.5f * diag) * d, d, 0.0f, kInfinity}, 0});
+    // From far away (beyond the origin budget of the precomputed prisms: rebuilt per ray).
+    const vec3 far = c + 1000.0f * diag * randomDir(rng);
+    const vec3 target = randomBasePoint(s, rng).p;
+    out.push_back({Ray{far, glm::normalize(target - far), 0.0f, kInfinity}, 0});
   }
   // Spawned from the oracle's hits of the camera rays: exactly at the hit with a small
   // tmin, or offset along the facing normal; into the hemisphere; plus shadow rays

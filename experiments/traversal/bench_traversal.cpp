@@ -55,6 +55,13 @@ std::vector<Config> configs() {
   std::vector<Config> c;
   AccelOptions canonical;  // defaults: rmip + newton + midpoint2d, inversion on
   c.push_back({"canonical", canonical});
+  // The canonical configuration at lower RMIP resolutions (paper Table 1's low / normal
+  // / high columns: the RMIP's memory against its bounds' tightness on small queries).
+  for (int res : {512, 256, 128}) {
+    AccelOptions o;
+    o.traversal.rangeParams = {{"resolution", res}};
+    c.push_back({"canonical_res" + std::to_string(res), o});
+  }
   AccelOptions tfdm;
   tfdm.traversal.range = "minmax_mipmap";
   tfdm.traversal.splitter = "quadtree";
@@ -96,6 +103,7 @@ void trace(benchmark::State& state, const Config& c) {
   state.counters["boxes/ray"] = double(counters.boxes) / n;
   state.counters["cells/ray"] = double(counters.cellsMarched) / n;
   state.counters["inversions/ray"] = double(counters.inversions) / n;
+  state.counters["prisms/ray"] = double(counters.prisms) / n;
   state.counters["hit%"] = 100.0 * double(hits) / n;
   state.counters["MB"] = double(totalBytes(a.memory())) / 1e6;
   state.counters["build_s"] = a.buildSeconds();

@@ -35,9 +35,7 @@ def main(path):
     print("|---|---|---|---|---|---|---|")
     t = med.get("tfdm")
     tess = med.get("tessellated")
-    for name in ["canonical", "tfdm", "tessellated"]:
-        if name not in med:
-            continue
+    for name in med:  # in the order the benchmark ran them
         m = med[name]
         speed = f"{m['mrays'] / t['mrays']:.2f}x" if t else "-"
         steps = f"{t['steps'] / m['steps']:.1f}x fewer" if t and m["steps"] > 0 else "-"
