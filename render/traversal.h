@@ -86,6 +86,57 @@ struct RayMargins {
   }
 };
 
+// An oriented box in T's frame (edge, in-plane perpendicular, face normal) around the
+// six vertices of a prism, hence around the prism (a convex combination of them). Most
+// rays Embree hands over meet the world AABB of a tilted prism but miss the prism; this
+// slab test rejects them before the exact crossings (render/prism.cpp).
+struct PrismOBB {
+  dvec3 axis[3]{dvec3(0.0), dvec3(0.0), dvec3(0.0)};
+  dvec3 lo{0.0}, hi{-1.0};  // in the axes' coordinates (relative to the world origin)
+
+  static PrismOBB around(const Prism& p, const DisplacedTriangle& T, double pad) {
+    PrismOBB b;
+    const dvec3 e = dvec3(T.p[1]) - dvec3(T.p[0]), f = dvec3(T.p[2]) - dvec3(T.p[0]);
+    const dvec3 n = glm::cross(e, f);
+    if (!(glm::length(n) > 0) || !(glm::length(e) > 0)) return b;  // empty: not used
+    b.axis[0] = glm::normalize(e);
+    b.axis[2] = glm::normalize(n);
+    b.axis[1] = glm::cross(b.axis[2], b.axis[0]);
+    b.lo = dvec3(std::numeric_limits<double>::infinity());
+    b.hi = -b.lo;
+    double mag = 0;
+    for (int k = 0; k < 6; ++k) {
+      const dvec3 v = p.vertex(k % 3, k >= 3);
+      const dvec3 c(glm::dot(b.axis[0], v), glm::dot(b.axis[1], v), glm::dot(b.axis[2], v));
+      b.lo = glm::min(b.lo, c);
+      b.hi = glm::max(b.hi, c);
+      mag = std::max({mag, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+    }
+    // The pad of the boxes, plus the rounding of these dot products here and per ray.
+    const double r = pad + 1e-12 * (mag + 1);
+    b.lo -= dvec3(r);
+    b.hi += dvec3(r);
+    return b;
+  }
+  bool valid() const { return lo.x <= hi.x; }
+  // Clips [t0, t1] to the box (t0 > t1 when missed). `slack` covers this ray's own
+  // rounding (relative to its origin's magnitude).
+  void clip(const dvec3& O, const dvec3& D, double slack, double& t0, double& t1) const {
+    for (int k = 0; k < 3; ++k) {
+      const double o = glm::dot(axis[k], O), d = glm::dot(axis[k], D);
+      const double l = lo[k] - slack, h = hi[k] + slack;
+      if (d == 0.0) {
+        if (o < l || o > h) t0 = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      double a = (l - o) / d, b = (h - o) / d;
+      if (a > b) std::swap(a, b);
+      t0 = std::max(t0, a);
+      t1 = std::min(t1, b);
+    }
+  }
+};
+
 // Everything a displaced mesh's intersector shares, whatever the strategies.
 struct TraversalMesh {
   std::vector<DisplacedTriangle> tris;
@@ -99,6 +150,7 @@ struct TraversalMesh {
   std::vector<Prism> prisms;
   std::vector<BoxD> prismBoxes;     // exact prism box, padded
   std::vector<BoxD> inflatedBoxes;  // inflated prism box, padded
+  std::vector<PrismOBB> obbs;       // oriented box around the inflated prism, padded
   std::vector<double> originBudget;
   Displacement disp;
   float cellDelta = 0;  // maxCellDelta(map)
@@ -110,7 +162,7 @@ struct TraversalMesh {
     return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
            cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
            prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
-           originBudget.capacity() * sizeof(double);
+           originBudget.capacity() * sizeof(double) + obbs.capacity() * sizeof(PrismOBB);
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
@@ -130,6 +182,7 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
   prisms.resize(tris.size());
   prismBoxes.resize(tris.size());
   inflatedBoxes.resize(tris.size());
+  obbs.resize(tris.size());
   originBudget.assign(tris.size(), -1.0);
   for (size_t i = 0; i < tris.size(); ++i) {
     const DisplacedTriangle& T = tris[i];
@@ -147,6 +200,7 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
     prismBoxes[i].pad(m.boxPad);
     inflatedBoxes[i] = prisms[i].bounds();
     inflatedBoxes[i].pad(m.boxPad);
+    obbs[i] = PrismOBB::around(prisms[i], T, m.boxPad);
   }
 }
 
@@ -260,6 +314,7 @@ class RayPatch final : public SplitContext {
     eps_ = P_.eps + P_.kxy * (2 * m.rayErr);
     if (pre) {
       prism_ = &mesh.prisms[prim];
+      obb_ = &mesh.obbs[prim];
       prismBox_ = mesh.prismBoxes[prim];
       inflatedBox_ = mesh.inflatedBoxes[prim];
     } else {
@@ -312,6 +367,11 @@ class RayPatch final : public SplitContext {
     double t0 = ray_.tmin - slack(ray_.tmin), t1 = ray_.tmax + slack(ray_.tmax);
     pbox.clip(O_, invD_, t0, t1);
     if (!(t0 <= t1)) return false;
+    if (obb_ && obb_->valid()) {
+      const double mag = std::max({std::abs(O_.x), std::abs(O_.y), std::abs(O_.z)});
+      obb_->clip(O_, D_, 1e-12 * (mag + 1), t0, t1);
+      if (!(t0 <= t1)) return false;
+    }
     Prism::Crossing first, last;
     const int nc = prism.crossings(O_, D_, first, last);
     if (nc == 0) return false;  // the line misses the inflated prism
@@ -632,6 +692,7 @@ class RayPatch final : public SplitContext {
   double boxPad_ = 0, tAbs_ = 0;
   dvec2 eps_{0.0};
   const Prism* prism_ = nullptr;
+  const PrismOBB* obb_ = nullptr;
   Prism ownPrism_;
   BoxD prismBox_, inflatedBox_;
   Psi psi_;
