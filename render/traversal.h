@@ -152,6 +152,7 @@ struct TraversalMesh {
   std::vector<BoxD> inflatedBoxes;  // inflated prism box, padded
   std::vector<PrismOBB> obbs;       // oriented box around the inflated prism, padded
   std::vector<double> originBudget;
+  std::vector<double> budgetPad;  // RayMargins::boxPad for an origin at the budget
   Displacement disp;
   float cellDelta = 0;  // maxCellDelta(map)
 
@@ -162,10 +163,26 @@ struct TraversalMesh {
     return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
            cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
            prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
-           originBudget.capacity() * sizeof(double) + obbs.capacity() * sizeof(PrismOBB);
+           (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB);
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
+
+  // A cheap exact reject before any per-ray set-up: true when [tmin, tmax] (with the
+  // traversal's own slack) misses the padded boxes around the inflated prism. Only for
+  // origins within the budget; beyond it, false (the full test decides).
+  bool missesPrism(uint32_t prim, const Ray& r) const {
+    const dvec3 O(r.o), D(r.d);
+    const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
+    if (!(maxO <= originBudget[prim])) return false;
+    const double tAbs = 8 * budgetPad[prim] / glm::length(D);
+    double t0 = r.tmin - (1e-5 * std::abs(double(r.tmin)) + tAbs);
+    double t1 = r.tmax + (1e-5 * std::abs(double(r.tmax)) + tAbs);
+    inflatedBoxes[prim].clip(O, 1.0 / D, t0, t1);
+    if (!(t0 <= t1)) return true;
+    if (obbs[prim].valid()) obbs[prim].clip(O, D, 1e-12 * (maxO + 1), t0, t1);
+    return !(t0 <= t1);
+  }
 };
 
 // Skipped triangles (not displaceable) are reported once per mesh.
@@ -184,6 +201,7 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
   inflatedBoxes.resize(tris.size());
   obbs.resize(tris.size());
   originBudget.assign(tris.size(), -1.0);
+  budgetPad.assign(tris.size(), 0.0);
   for (size_t i = 0; i < tris.size(); ++i) {
     const DisplacedTriangle& T = tris[i];
     cells[i] = cellsOverlapping(T, d);
@@ -195,6 +213,7 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
     const double maxP = maxAbsVertex(T), ab = std::abs(params[i].a) + std::abs(params[i].b);
     originBudget[i] = 16 * (maxP + ab) + 16;
     const RayMargins m = RayMargins::make(params[i], maxP, originBudget[i]);
+    budgetPad[i] = m.boxPad;
     prisms[i] = m.prism(frames[i], params[i]);
     prismBoxes[i] = Prism::exact(T, params[i].a, params[i].b).bounds();
     prismBoxes[i].pad(m.boxPad);
@@ -314,7 +333,6 @@ class RayPatch final : public SplitContext {
     eps_ = P_.eps + P_.kxy * (2 * m.rayErr);
     if (pre) {
       prism_ = &mesh.prisms[prim];
-      obb_ = &mesh.obbs[prim];
       prismBox_ = mesh.prismBoxes[prim];
       inflatedBox_ = mesh.inflatedBoxes[prim];
     } else {
@@ -367,11 +385,6 @@ class RayPatch final : public SplitContext {
     double t0 = ray_.tmin - slack(ray_.tmin), t1 = ray_.tmax + slack(ray_.tmax);
     pbox.clip(O_, invD_, t0, t1);
     if (!(t0 <= t1)) return false;
-    if (obb_ && obb_->valid()) {
-      const double mag = std::max({std::abs(O_.x), std::abs(O_.y), std::abs(O_.z)});
-      obb_->clip(O_, D_, 1e-12 * (mag + 1), t0, t1);
-      if (!(t0 <= t1)) return false;
-    }
     Prism::Crossing first, last;
     const int nc = prism.crossings(O_, D_, first, last);
     if (nc == 0) return false;  // the line misses the inflated prism
@@ -692,7 +705,6 @@ class RayPatch final : public SplitContext {
   double boxPad_ = 0, tAbs_ = 0;
   dvec2 eps_{0.0};
   const Prism* prism_ = nullptr;
-  const PrismOBB* obb_ = nullptr;
   Prism ownPrism_;
   BoxD prismBox_, inflatedBox_;
   Psi psi_;
@@ -749,6 +761,10 @@ class Traversal final : public TraversalIntersectorBase {
     if (!mesh_.params[prim].valid) return false;
     RayCounters local;
     local.prisms = 1;
+    if (mesh_.missesPrism(prim, r)) {
+      flushCounters(local, false, c);
+      return false;
+    }
     const RQ& rq = static_cast<const RQ&>(*rq_);
     const Inv& inv = static_cast<const Inv&>(*inv_);
     const Split& split = static_cast<const Split&>(*split_);
