@@ -1,6 +1,7 @@
 // oblong: command-line front end.
 //   oblong render [SCENE.json] -o out.png [--size WxH] [--spp N] [--integrator primary|ao|path] [--seed S]
-//                 [--threads N] [--aovs out.exr] [--heatmap steps.png] [--stats out.json] [strategy flags]
+//                 [--normals micro|smooth] [--threads N] [--aovs out.exr] [--heatmap steps.png]
+//                 [--stats out.json] [strategy flags]
 //   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv [--stats out.json] [strategy flags]
 //   oblong info   [SCENE.json] [--range NAME]
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
@@ -15,7 +16,11 @@
 #include "render/embree_scene.h"
 #include "render/rays_io.h"
 #include "render/renderer.h"
+#include "render/traversal.h"
+#include "strategies/minmax_mipmap.h"
 #include "strategies/range_query.h"
+#include "strategies/rmip.h"
+#include "strategies/safety_zones.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -24,6 +29,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include <bit>
 #include <chrono>
 #include <fstream>
 #include <optional>
@@ -49,21 +55,6 @@ std::string human(size_t bytes) {
   if (bytes >= (size_t(1) << 20)) return fmt::format("{:.2f} MiB", bytes / double(1 << 20));
   if (bytes >= 1024) return fmt::format("{:.1f} KiB", bytes / 1024.0);
   return fmt::format("{} B", bytes);
-}
-
-// The scene's range-query strategy built for each displaced mesh, sized by what its
-// triangles can ask (DESIGN invariant 4).
-std::vector<std::unique_ptr<RangeQuery>> buildRangeQueries(const Scene& scene, const std::string& name) {
-  std::vector<std::unique_ptr<RangeQuery>> out;
-  for (const SceneMesh& sm : scene.meshes) {
-    if (!sm.displacement) continue;
-    std::vector<Rect> boxes;
-    for (size_t i = 0; i < sm.mesh.triangles.size(); ++i) boxes.push_back(sm.mesh.triangle(i).uvBox);
-    RangeQueryContext ctx{*sm.displacement, QueryNeeds::forRects(*sm.displacement, boxes)};
-    ParamSet params(name == scene.range.name ? scene.range.params : nlohmann::json::object(), scene.range.where);
-    out.push_back(createRangeQuery(name, params, ctx));
-  }
-  return out;
 }
 
 // Strategy flags shared by render and trace; unset flags keep the scene's choice.
@@ -145,7 +136,7 @@ void writeJson(const std::string& path, const nlohmann::json& j) {
 }
 
 struct RenderFlags {
-  std::string out = "oblong.png", size, statsPath, aovs, heatmap, integrator = "path";
+  std::string out = "oblong.png", size, statsPath, aovs, heatmap, integrator = "path", normals = "micro";
   int threads = 0, spp = 1, maxDepth = 5;
   uint64_t seed = 0;
   bool quiet = false;
@@ -164,6 +155,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   opts.maxDepth = f.maxDepth;
   opts.seed = f.seed;
   opts.integrator = parseIntegrator(f.integrator);
+  opts.normals = parseShadingNormals(f.normals);
   opts.progress = !f.quiet;
   Stats::reset();
   EmbreeScene accel(scene, accelOpts);
@@ -191,6 +183,12 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
       opts.size.x, opts.size.y, opts.spp, integratorName(opts.integrator), res.seconds, mrays, res.primaryRays,
       res.secondaryRays, 100.0 * res.hits / std::max<int64_t>(1, res.primaryRays), meanPrimarySteps,
       double(res.counters.steps()) / std::max(1.0, rays), human(totalBytes(mem)));
+  if (!f.heatmap.empty()) {
+    float maxSteps = 0;
+    for (float st : res.aov.steps) maxSteps = std::max(maxSteps, st);
+    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {:.0f}\n", f.heatmap,
+               std::max(1.0f, maxSteps));
+  }
   if (!f.statsPath.empty()) {
     nlohmann::json j;
     j["scene"] = scene.path;
@@ -198,6 +196,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
     j["config"] = configJson(accelOpts);
     j["image"] = {{"width", opts.size.x}, {"height", opts.size.y}, {"file", f.out}};
     j["integrator"] = integratorName(opts.integrator);
+    j["normals"] = shadingNormalsName(opts.normals);
     j["spp"] = opts.spp;
     j["seed"] = opts.seed;
     j["threads"] = f.threads;
@@ -256,31 +255,128 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   return 0;
 }
 
+// Entries of one axis of RMIP layer p over n pixels (corner stride 2^shift): mirrors
+// strategies/rmip.cpp, which keeps the layer table private; runInfo checks the sum
+// against the built layers' bytes and drops the breakdown if they ever disagree.
+int rmipEntries(int n, int p, int shift, bool wrap) {
+  const int s = 1 << shift;
+  return wrap ? (n + s - 1) / s : (n - (1 << p)) / s + 1;
+}
+
+// What the range query chosen for one displaced mesh built (DESIGN invariant 4): its
+// layers or levels, wrap storage and bytes of each part.
+void printRangeQuery(const RangeQuery& rq, const TraversalConfig& cfg) {
+  const int W = rq.map().width(), H = rq.map().height();
+  if (const auto* r = dynamic_cast<const Rmip*>(&rq)) {
+    const int c = cfg.rangeParams.is_object() ? cfg.rangeParams.value("compression", 1) : 1;
+    const int P = r->layersX() - 1, Q = r->layersY() - 1, rw = r->resolutionX(), rh = r->resolutionY();
+    const int fullP = int(std::bit_width(unsigned(rw))) - 1, fullQ = int(std::bit_width(unsigned(rh))) - 1;
+    fmt::print("      pixels   : {}x{} ({} sample{} per pixel per axis), compression {}\n", rw, rh,
+               r->downsample(), r->downsample() == 1 ? "" : "s", c);
+    fmt::print("      layers   : (p, q) for p 0..{}, q 0..{}: {} layers of the {} a full pyramid has "
+               "(block 2^p x 2^q texels)\n", P, Q, (P + 1) * (Q + 1), (fullP + 1) * (fullQ + 1));
+    // Bytes per layer; the layers with and without the wrapping corners.
+    size_t sum = 0, noWrap = 0;
+    std::vector<std::vector<size_t>> bytes(size_t(P + 1), std::vector<size_t>(size_t(Q + 1)));
+    for (int p = 0; p <= P; ++p)
+      for (int q = 0; q <= Q; ++q) {
+        const int sx = std::max(p - c, 0), sy = std::max(q - c, 0);
+        bytes[p][q] = size_t(rmipEntries(rw, p, sx, r->storesWrap())) * rmipEntries(rh, q, sy, r->storesWrap()) *
+                      sizeof(Interval);
+        sum += bytes[p][q];
+        noWrap += size_t(rmipEntries(rw, p, sx, false)) * rmipEntries(rh, q, sy, false) * sizeof(Interval);
+      }
+    size_t built = 0;
+    for (const auto& m : rq.memory())
+      if (m.name == "rmip/layers") built = m.bytes;
+    if (sum == built) {
+      std::string head = "      bytes    :     ";
+      for (int q = 0; q <= Q; ++q) head += fmt::format("{:>11}", fmt::format("q={}", q));
+      fmt::print("{}\n", head);
+      for (int p = 0; p <= P; ++p) {
+        std::string row = fmt::format("                 p={:<3}", p);
+        for (int q = 0; q <= Q; ++q) row += fmt::format("{:>11}", human(bytes[p][q]));
+        fmt::print("{}\n", row);
+      }
+    } else {
+      fmt::print("      bytes    : per-layer breakdown unavailable (layout changed; total below)\n");
+    }
+    if (r->storesWrap())
+      fmt::print("      wrap     : corners wrapping around the map border stored: {} of the layers\n",
+                 sum == built ? human(sum - noWrap) : std::string("(see above)"));
+    else
+      fmt::print("      wrap     : none stored (no query crosses the map border)\n");
+  } else if (const auto* m = dynamic_cast<const MinMaxMipmap*>(&rq)) {
+    const int full = int(std::bit_width(unsigned(std::max(W, H) - 1))) + 1;
+    fmt::print("      levels   : 0..{} of the {} a full mipmap has (level 0 is the map itself)\n", m->levels() - 1,
+               full);
+    for (int k = 1; k < m->levels(); ++k)
+      fmt::print("      level {:<2} : {}x{} nodes, {}\n", k, m->levelWidth(k), m->levelHeight(k),
+                 human(size_t(m->levelWidth(k)) * m->levelHeight(k) * sizeof(Interval)));
+    fmt::print("      wrap     : none stored (queries crossing the border are split)\n");
+  } else if (const auto* z = dynamic_cast<const SafetyZones*>(&rq)) {
+    std::string ds;
+    for (int d : z->deltas()) ds += fmt::format("{}{}", ds.empty() ? "" : ", ", d);
+    fmt::print("      zones    : deltas [{}], one {}x{} min/max map each, {} each\n", ds, W, H,
+               human(size_t(W) * H * sizeof(Interval)));
+    fmt::print("      wrap     : none stored (wrap addressing while building)\n");
+  }
+  fmt::print("      LoD      : no levels built (LoD off: only lod 0 is defined, docs/decisions.md)\n");
+}
+
 int runInfo(const std::string& scenePath, const std::string& range) {
   Scene scene = sceneFrom(scenePath);
-  const std::string name = range.empty() ? scene.range.name : range;
+  StrategyFlags flags;
+  flags.range = range;
+  const TraversalConfig cfg = flags.resolve(scene).traversal;
   fmt::print("scene {}\n", scene.path);
-  size_t displaced = 0;
+  size_t displaced = 0, total = 0;
   for (size_t i = 0; i < scene.meshes.size(); ++i) {
     const SceneMesh& sm = scene.meshes[i];
     fmt::print("  mesh {} '{}': {} vertices, {} triangles, {}\n", i, sm.mesh.name, sm.mesh.positions.size(),
                sm.mesh.triangles.size(), sm.displacement ? "displaced" : "plain (Embree triangles)");
-    if (sm.displacement) {
-      ++displaced;
-      const Displacement& d = *sm.displacement;
-      fmt::print("    map {} ({}x{}), scale {}, bias {}, tiling ({}, {}), {}\n", d.map->name(), d.map->width(),
-                 d.map->height(), d.scale, d.bias, d.tiling.x, d.tiling.y, human(d.map->bytes()));
+    if (!sm.displacement) {
+      fmt::print("    built    : no range query, no prisms ({})\n", human(sm.mesh.bytes()));
+      continue;
     }
-  }
-  auto rqs = buildRangeQueries(scene, name);
-  size_t k = 0;
-  for (const auto& rq : rqs) {
-    const QueryNeeds& n = rq->needs();
-    fmt::print("  range query '{}' for displaced mesh {}: needs extents {}x{} samples, wrap {}\n", rq->name(), k++,
-               n.maxExtentX, n.maxExtentY, n.wrap ? "yes" : "no");
-    for (const auto& m : rq->memory()) fmt::print("    {:<28} {}\n", m.name, human(m.bytes));
+    const Displacement& d = *sm.displacement;
+    fmt::print("    map {} ({}x{}), scale {}, bias {}, tiling ({}, {}), {}\n", d.map->name(), d.map->width(),
+               d.map->height(), d.scale, d.bias, d.tiling.x, d.tiling.y, human(d.map->bytes()));
+    // What the traversal builds: the range query sized by the triangles' uv boxes
+    // (as createIntersector does) and one prism per displaceable triangle.
+    std::vector<DisplacedTriangle> tris(sm.mesh.triangles.size());
+    std::vector<Rect> boxes;
+    for (size_t t = 0; t < tris.size(); ++t) {
+      tris[t] = sm.mesh.triangle(t);
+      if (tris[t].uvArea2 != 0.0f) boxes.push_back(tris[t].uvBox);
+    }
+    const QueryNeeds needs = QueryNeeds::forRects(d, boxes);
+    const bool tiled = d.tiling != vec2(1.0f);
+    fmt::print("    needs    : range queries up to {}x{} samples; wrapping queries {}; LoD off\n", needs.maxExtentX,
+               needs.maxExtentY,
+               !needs.wrap ? "no" : tiled ? "yes (the map is tiled)" : "yes (triangles' cells cross the map border)");
+    const auto is = createIntersector(cfg, tris, d);
+    ParamSet params(cfg.rangeParams, "strategies.range");
+    const auto rq = createRangeQuery(cfg.range, params, RangeQueryContext{d, needs});
+    fmt::print("    range query '{}' for displaced mesh {}:\n", rq->name(), displaced);
+    printRangeQuery(*rq, cfg);
+    size_t prisms = 0, wellPosed = 0;
+    if (const auto* t = dynamic_cast<const TraversalIntersectorBase*>(is.get())) {
+      for (const PrismParams& pp : t->mesh().params) prisms += pp.valid, wellPosed += pp.valid && pp.wellPosed;
+      fmt::print("    prisms   : {} built ({} well-posed, {} box-only), {} skipped (not displaceable)\n", prisms,
+                 wellPosed, prisms - wellPosed, tris.size() - prisms);
+    }
+    const MemoryReport mem = is->memory();
+    std::string parts;
+    for (const auto& m : mem) parts += fmt::format("{}{} {}", parts.empty() ? "" : ", ", m.name, human(m.bytes));
+    fmt::print("    built    : {} = {}\n", parts, human(totalBytes(mem)));
+    total += totalBytes(mem);
+    ++displaced;
   }
   if (displaced == 0) fmt::print("  no displaced mesh: no range query built\n");
+  else
+    fmt::print("  total    : {} built for {} displaced mesh{} (plus Embree's BVH, reported by oblong render)\n",
+               human(total), displaced, displaced == 1 ? "" : "es");
   return 0;
 }
 
@@ -302,6 +398,8 @@ int main(int argc, char** argv) {
   render->add_option("--spp", rf.spp, "samples per pixel");
   render->add_option("--integrator", rf.integrator, "primary | ao | path");
   render->add_option("--max-depth", rf.maxDepth, "path: longest path (vertices)");
+  render->add_option("--normals", rf.normals,
+                     "shading normals: micro (the micro-triangle's) | smooth (PDM paper §5.1)");
   render->add_option("--seed", rf.seed, "random seed (same seed, same image, any thread count)");
   render->add_option("--aovs", rf.aovs, "multi-channel EXR: colour, depth, normal, per-pixel counters");
   render->add_option("--heatmap", rf.heatmap, "false-colour log-scale heat map of traversal steps (PNG)");

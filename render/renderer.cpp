@@ -97,14 +97,48 @@ class Progress {
   std::thread thread_;
 };
 
+// Barycentrics (u, v) of the point of T's plane nearest to p (Ericson 2004, §3.4).
+vec2 baryOfPoint(const DisplacedTriangle& T, const vec3& p) {
+  const vec3 e1 = T.p[1] - T.p[0], e2 = T.p[2] - T.p[0], w = p - T.p[0];
+  const float d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
+  const float w1 = glm::dot(w, e1), w2 = glm::dot(w, e2), den = d11 * d22 - d12 * d12;
+  if (!(den > 0)) return vec2(1.0f / 3.0f);
+  return vec2((d22 * w1 - d12 * w2) / den, (d11 * w2 - d12 * w1) / den);
+}
+
 struct Tracer {
   const Scene& scene;
   const EmbreeScene& accel;
   const RenderOptions& opts;
   float aoRadius;
+  // Smooth normals: every mesh's triangles, prepared once (indexed by Hit::prim).
+  std::vector<std::vector<DisplacedTriangle>> triangles;
 
-  // Direct light from every light at p (normal n facing the incoming ray).
-  vec3 direct(const vec3& p, const vec3& n, const vec3& albedo, RayCounters& c, int64_t& rays) const {
+  // The geometric normal facing the ray (ngf) and the shading normal (ns, same side).
+  void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
+    ngf = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
+    ns = ngf;
+    if (opts.normals != ShadingNormals::Smooth) return;
+    const SceneMesh& sm = scene.meshes[size_t(h.mesh)];
+    const DisplacedTriangle& T = triangles[size_t(h.mesh)][size_t(h.prim)];
+    // Displaced hits carry T's uv (exact barycentrics); plain ones only the point.
+    vec2 b = sm.displacement ? T.baryOfUV(h.uv) : baryOfPoint(T, r.at(h.t));
+    b = glm::clamp(b, vec2(0.0f), vec2(1.0f));  // rounding can leave T by an ulp
+    if (b.x + b.y > 1.0f) b /= b.x + b.y;
+    const vec3 n = smoothDisplacedNormal(T, sm.displacement ? &*sm.displacement : nullptr, b.x, b.y);
+    if (n == vec3(0.0f)) return;
+    ns = glm::dot(n, ngf) < 0 ? -n : n;
+  }
+
+  // Offset origin of a ray leaving p in direction d (the side of ngf it leaves by).
+  static vec3 spawn(const vec3& p, const vec3& ngf, const vec3& d) {
+    return p + (glm::dot(ngf, d) < 0 ? -spawnEps(p) : spawnEps(p)) * ngf;
+  }
+
+  // Direct light from every light at p (geometric normal ng and shading normal n facing
+  // the incoming ray).
+  vec3 direct(const vec3& p, const vec3& ng, const vec3& n, const vec3& albedo, RayCounters& c,
+              int64_t& rays) const {
     vec3 L(0.0f);
     for (const Light& light : scene.lights) {
       vec3 wi;
@@ -119,9 +153,9 @@ struct Tracer {
         falloff = 1.0f / (dist * dist);
       }
       const float cosTheta = glm::dot(n, wi);
-      if (cosTheta <= 0) continue;
+      if (cosTheta <= 0 || glm::dot(ng, wi) <= 0) continue;  // the surface itself shadows p
       ++rays;
-      const Ray s{p + spawnEps(p) * n, wi, 0.0f, dist * (1.0f - 1e-4f)};
+      const Ray s{p + spawnEps(p) * ng, wi, 0.0f, dist * (1.0f - 1e-4f)};
       if (!accel.occluded(s, &c)) L += albedo * light.intensity * (cosTheta * falloff / kPi);
     }
     return L;
@@ -130,22 +164,24 @@ struct Tracer {
   // Radiance along a camera ray whose first hit is h.
   vec3 shade(const Ray& r, const Hit& h, Rng& rng, RayCounters& c, int64_t& rays) const {
     if (!h.valid()) return opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
-    vec3 n = h.ng;
-    if (glm::dot(n, r.d) > 0) n = -n;
+    vec3 ng, n;
+    normals(r, h, ng, n);
     if (opts.integrator == Integrator::Primary) return 0.5f * n + 0.5f;
     const vec3 p = r.at(h.t);
     if (opts.integrator == Integrator::AO) {
+      const vec3 d = cosineSample(n, rng);
+      if (glm::dot(d, ng) <= 0) return vec3(0.0f);  // below the geometric surface: occluded
       ++rays;
-      const Ray a{p + spawnEps(p) * n, cosineSample(n, rng), 0.0f, aoRadius};
+      const Ray a{spawn(p, ng, d), d, 0.0f, aoRadius};
       return vec3(accel.occluded(a, &c) ? 0.0f : 1.0f);
     }
     // Path tracing: diffuse surfaces, NEE at every vertex, sky on escape.
     vec3 L(0.0f), beta(1.0f);
-    vec3 pos = p, nrm = n;
+    vec3 pos = p, nrm = n, geo = ng;
     int mesh = h.mesh;
     for (int depth = 0;; ++depth) {
       const vec3 albedo = scene.meshes[size_t(mesh)].albedo;
-      L += beta * direct(pos, nrm, albedo, c, rays);
+      L += beta * direct(pos, geo, nrm, albedo, c, rays);
       if (depth + 1 >= opts.maxDepth) break;
       beta *= albedo;  // cosine-weighted sampling of a Lambertian BRDF
       if (depth >= 3) {
@@ -153,14 +189,16 @@ struct Tracer {
         if (rng.uniform() >= q) break;
         beta /= q;
       }
-      const Ray b{pos + spawnEps(pos) * nrm, cosineSample(nrm, rng), 0.0f, kInfinity};
+      const vec3 d = cosineSample(nrm, rng);
+      if (glm::dot(d, geo) <= 0) break;  // into the surface (smooth normals only): absorbed
+      const Ray b{spawn(pos, geo, d), d, 0.0f, kInfinity};
       ++rays;
       const Hit bh = accel.intersect(b, &c);
       if (!bh.valid()) {
         L += beta * opts.sky;
         break;
       }
-      nrm = glm::dot(bh.ng, b.d) > 0 ? -bh.ng : bh.ng;
+      normals(b, bh, geo, nrm);
       pos = b.at(bh.t);
       mesh = bh.mesh;
     }
@@ -182,6 +220,44 @@ Integrator parseIntegrator(const std::string& name) {
   if (name == "ao") return Integrator::AO;
   if (name == "path") return Integrator::Path;
   fail("--integrator", "unknown integrator '{}' (primary | ao | path)", name);
+}
+
+ShadingNormals parseShadingNormals(const std::string& name) {
+  if (name == "micro") return ShadingNormals::Micro;
+  if (name == "smooth") return ShadingNormals::Smooth;
+  fail("--normals", "unknown shading normals '{}' (micro | smooth)", name);
+}
+
+const char* shadingNormalsName(ShadingNormals n) { return n == ShadingNormals::Smooth ? "smooth" : "micro"; }
+
+vec2 bilinearHeightGradient(const Displacement& d, const vec2& uv) {
+  const dvec2 s = d.toSample(uv);
+  const double fi = std::floor(s.x), fj = std::floor(s.y);
+  const int i = int(fi), j = int(fj);
+  const float fx = float(s.x - fi), fy = float(s.y - fj);
+  const HeightMap& m = *d.map;
+  const float h00 = m.at(i, j), h10 = m.at(i + 1, j), h01 = m.at(i, j + 1), h11 = m.at(i + 1, j + 1);
+  // ∂H/∂sample, then the chain rule through toSample (samples per uv unit per axis).
+  const float dx = (1 - fy) * (h10 - h00) + fy * (h11 - h01), dy = (1 - fx) * (h01 - h00) + fx * (h11 - h10);
+  return d.scale * vec2(dx * d.tiling.x * float(m.width()), dy * d.tiling.y * float(m.height()));
+}
+
+vec3 smoothDisplacedNormal(const DisplacedTriangle& T, const Displacement* d, float u, float v) {
+  const vec3 Pu = T.p[1] - T.p[0], Pv = T.p[2] - T.p[0], Ng = glm::cross(Pu, Pv);
+  const vec3 N = T.N(u, v);
+  const float lenN = glm::length(N), lenG = glm::length(Ng);
+  if (!(lenN > 0) || !(lenG > 0)) return vec3(0.0f);
+  // P_u × P_v replaced by n̂ of the same length and side (vertex normals may point against
+  // the winding); the gradient terms keep n̂ as it is, the direction heights go.
+  const vec3 nh = N / lenN;
+  vec3 n = (glm::dot(N, Ng) < 0 ? -lenG : lenG) * nh;
+  if (d && d->map) {
+    const vec2 g = bilinearHeightGradient(*d, T.UV(u, v));
+    const float hu = glm::dot(g, T.t[1] - T.t[0]), hv = glm::dot(g, T.t[2] - T.t[0]);  // ∂h/∂(u, v)
+    n += hv * glm::cross(Pu, nh) + hu * glm::cross(nh, Pv);
+  }
+  const float len = glm::length(n);
+  return len > 0 && std::isfinite(len) ? n / len : vec3(0.0f);
 }
 
 const char* integratorName(Integrator i) {
@@ -209,7 +285,12 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
   aov.cellsMarched.assign(npx, 0.0f);
 
   const PinholeCamera cam(scene.camera, opts.size);
-  const Tracer tracer{scene, accel, opts, opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene)};
+  Tracer tracer{scene, accel, opts, opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene), {}};
+  if (opts.normals == ShadingNormals::Smooth)
+    for (const SceneMesh& sm : scene.meshes) {
+      std::vector<DisplacedTriangle>& tris = tracer.triangles.emplace_back(sm.mesh.triangles.size());
+      for (size_t i = 0; i < tris.size(); ++i) tris[i] = sm.mesh.triangle(i);
+    }
   std::atomic<int64_t> secondary{0}, hits{0};
   std::mutex countersMutex;
   std::unique_ptr<tbb::global_control> limit;
@@ -235,8 +316,9 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
           primary += camera;
           tileCounters += camera;
           if (s == 0 && h.valid()) {
+            vec3 ng;
             aov.depth[px] = h.t;
-            aov.normal[px] = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
+            tracer.normals(r, h, ng, aov.normal[px]);
           }
           localHits += h.valid();
           sum += tracer.shade(r, h, rng, tileCounters, localRays);

@@ -7,9 +7,12 @@
 //   path     a small diffuse path tracer with next-event estimation towards the scene's
 //            point and directional lights, a constant sky, Russian roulette after depth 3
 //
-// Shading normals are the geometric normals of the hit micro-triangles (the
-// micro-geometry is flat, DESIGN §1); secondary rays start at p + ε·n on the side the
-// ray came from, ε = 1e-4·max(1, |p|) (DESIGN invariant 5).
+// Shading normals (--normals): `micro`, the geometric normal of the hit micro-triangle
+// (the micro-geometry is flat, DESIGN §1; shows every texel cell and base edge), or
+// `smooth`, the smoothed displaced normal of the PDM paper §5.1 (smoothDisplacedNormal).
+// Secondary rays start at p + ε·n_g on the side of the geometric normal n_g they leave
+// by, ε = 1e-4·max(1, |p|) (DESIGN invariant 5); with smooth normals, light and bounce
+// directions below the geometric surface are dropped (no light through the surface).
 #pragma once
 
 #include "render/embree_scene.h"
@@ -25,11 +28,28 @@ enum class Integrator { Primary, AO, Path };
 Integrator parseIntegrator(const std::string& name);  // throws oblong::Error
 const char* integratorName(Integrator i);
 
+enum class ShadingNormals { Micro, Smooth };
+ShadingNormals parseShadingNormals(const std::string& name);  // throws oblong::Error
+const char* shadingNormalsName(ShadingNormals n);
+
+// The smoothed displaced normal of the PDM paper (Hoetzlein 2025, §5.1 and App. B,
+// Eq. 19) at barycentrics (u, v) of T: the normal of S = P + h·N/|N| with the base
+// triangle's flat normal P_u × P_v replaced by the interpolated vertex normal scaled to
+// the same length (and orientation), h's gradient taken from the bilinear map:
+//     N's = |P_u × P_v|·n̂ + h_v·(P_u × n̂) + h_u·(n̂ × P_v),   n̂ = N(u,v)/|N(u,v)|.
+// Like the paper, the terms h·∂n̂ are dropped. Without a displacement (d == nullptr): n̂,
+// Phong's interpolated normal. Unit length, oriented like P_u × P_v; zero when it cannot
+// be formed (degenerate T).
+vec3 smoothDisplacedNormal(const DisplacedTriangle& T, const Displacement* d, float u, float v);
+// ∇_uv h of the bilinear height h(uv) (DESIGN §1), inside the cell that holds uv.
+vec2 bilinearHeightGradient(const Displacement& d, const vec2& uv);
+
 struct RenderOptions {
   ivec2 size{640, 480};
   int spp = 1;
   int threads = 0;  // 0: all cores
   Integrator integrator = Integrator::Path;
+  ShadingNormals normals = ShadingNormals::Micro;
   uint64_t seed = 0;
   int maxDepth = 5;          // path: bounces
   float aoRadius = 0.0f;     // ao: 0 = a quarter of the scene's bounding-box diagonal

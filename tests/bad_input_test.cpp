@@ -8,16 +8,19 @@
 #include "test_util.h"
 
 #include <catch2/catch.hpp>
+#include <fmt/core.h>
 
 #include <sys/stat.h>
 #include <sys/wait.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <thread>
 
 using namespace oblong;
 using Catch::Matchers::Contains;
@@ -37,10 +40,12 @@ std::string slurp(const fs::path& p) {
   return s.str();
 }
 
-// Runs the oblong binary; `timeout` guards against a hang (exit status 124).
-Run runCli(const std::string& args) {
+// Runs the oblong binary; `timeout` guards against a hang (exit status 124). Runs in
+// flight at the same time need distinct `id`s (their output files).
+Run runCli(const std::string& args, int id = 0) {
   const fs::path dir = test::scratchDir("bad_input_cli");
-  const std::string o = (dir / "stdout.txt").string(), e = (dir / "stderr.txt").string();
+  const std::string o = (dir / fmt::format("stdout{}.txt", id)).string(),
+                    e = (dir / fmt::format("stderr{}.txt", id)).string();
   const std::string cmd = "timeout 60 " + std::string(OBLONG_BINARY) + " " + args + " >" + o + " 2>" + e;
   const int raw = std::system(cmd.c_str());
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(o), slurp(e)};
@@ -50,8 +55,23 @@ size_t lines(const std::string& s) { return size_t(std::count(s.begin(), s.end()
 
 void write(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
-// The scratch folder with every auxiliary file the cases refer to.
-fs::path fixtures() {
+// Runs the command lines concurrently (each is mostly the binary's start-up), at most
+// `jobs` at a time; results in the order given.
+std::vector<Run> runClis(const std::vector<std::string>& args, unsigned jobs) {
+  std::vector<Run> out(args.size());
+  std::atomic<size_t> next{0};
+  std::vector<std::thread> pool;
+  for (unsigned t = 0; t < std::max(1u, jobs); ++t)
+    pool.emplace_back([&] {
+      for (size_t i; (i = next++) < args.size();) out[i] = runCli(args[i], int(i) + 1);
+    });
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+// The scratch folder with every auxiliary file the cases refer to, written once per
+// process (the test cases only read it).
+fs::path makeFixtures() {
   const fs::path dir = test::scratchDir("bad_input");
   write(dir / "quad.obj",
         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
@@ -112,6 +132,11 @@ fs::path fixtures() {
   fs::create_directories(dir / "folder.png");
   fs::create_directories(dir / "folder.obj");
   if (!fs::exists(dir / "fifo.png")) ::mkfifo((dir / "fifo.png").c_str(), 0600);
+  return dir;
+}
+
+const fs::path& fixtures() {
+  static const fs::path dir = makeFixtures();
   return dir;
 }
 
@@ -210,32 +235,40 @@ TEST_CASE("bad input: one clear error line from the loader and from the command 
       {"heights overflowing a float", displaced("quad.obj", R"("map": "map.png", "scale": 3e38, "bias": 3e38)"),
        {"meshes[0].displacement.scale", "overflow"}},
   };
-  int k = 0;
-  for (const Case& c : cases) {
-    DYNAMIC_SECTION(c.name) {
-      const std::string path = (dir / ("case" + std::to_string(k) + ".json")).string();
-      write(path, c.scene);
-      INFO("scene: " << c.scene);
-      // The loader.
-      std::string msg;
-      try {
-        loadScene(path);
-        FAIL("no error");
-      } catch (const Error& e) {
-        msg = e.what();
-      }
-      INFO("loader: " << msg);
-      CHECK(msg.rfind(path + ": ", 0) == 0);
-      CHECK(msg.find('\n') == std::string::npos);
-      for (const auto& s : c.expect) CHECK_THAT(msg, Contains(s));
-      // The command line: the same message, one line, exit status 1.
-      const Run r = runCli("info " + path);
-      INFO("stdout: " << r.out << "\nstderr: " << r.err);
-      CHECK(r.status == 1);
-      CHECK(lines(r.err) == 1);
-      CHECK(r.err == "oblong: " + msg + "\n");
+  // One pass over the cases, setup done once: sections would re-run the whole test case
+  // (fixtures and all) per case. The command lines run concurrently, checked after.
+  const size_t n = std::size(cases);
+  std::vector<std::string> paths(n), args(n);
+  for (size_t k = 0; k < n; ++k) {
+    paths[k] = (dir / ("case" + std::to_string(k) + ".json")).string();
+    write(paths[k], cases[k].scene);
+    args[k] = "info " + paths[k];
+  }
+  const std::vector<Run> runs = runClis(args, 2 * std::max(1u, std::thread::hardware_concurrency()));
+  for (size_t k = 0; k < n; ++k) {
+    const Case& c = cases[k];
+    const std::string& path = paths[k];
+    INFO("case: " << c.name << "\nscene: " << c.scene);
+    // The loader.
+    std::string msg;
+    bool threw = false;
+    try {
+      loadScene(path);
+    } catch (const Error& e) {
+      msg = e.what();
+      threw = true;
     }
-    ++k;
+    INFO("loader: " << msg);
+    CHECK(threw);
+    CHECK(msg.rfind(path + ": ", 0) == 0);
+    CHECK(msg.find('\n') == std::string::npos);
+    for (const auto& s : c.expect) CHECK_THAT(msg, Contains(s));
+    // The command line: the same message, one line, exit status 1.
+    const Run& r = runs[k];
+    INFO("stdout: " << r.out << "\nstderr: " << r.err);
+    CHECK(r.status == 1);
+    CHECK(lines(r.err) == 1);
+    CHECK(r.err == "oblong: " + msg + "\n");
   }
 }
 

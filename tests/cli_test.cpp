@@ -53,13 +53,50 @@ TEST_CASE("oblong render writes an image and statistics for the default scene", 
 }
 
 TEST_CASE("oblong info reports the range-query structures built for the scene", "[cli]") {
+  auto has = [](const std::string& out, const std::string& s) { return out.find(s) != std::string::npos; };
   for (const char* name : {"rmip", "minmax_mipmap", "safety_zones"}) {
     const Run r = run(std::string("info --range ") + name);
     INFO(r.out << r.err);
     REQUIRE(r.status == 0);
-    CHECK(r.out.find(std::string("range query '") + name + "'") != std::string::npos);
-    CHECK(r.out.find("plain (Embree triangles)") != std::string::npos);
+    CHECK(has(r.out, std::string("range query '") + name + "'"));
+    CHECK(has(r.out, "plain (Embree triangles)"));
+    // What was built, with bytes (DESIGN invariant 4): the default torus is tiled (4, 2).
+    CHECK(has(r.out, "wrapping queries yes (the map is tiled)"));
+    CHECK(has(r.out, "prisms   : 2304 built (2304 well-posed, 0 box-only), 0 skipped"));
+    CHECK(has(r.out, "built    : no range query, no prisms"));
+    CHECK(has(r.out, "LoD      : no levels built"));
+    CHECK(has(r.out, "total    : "));
   }
+  const Run r = run("info --range rmip");
+  CHECK(has(r.out, "layers   : (p, q) for p 0..5, q 0..4: 30 layers of the 81 a full pyramid has"));
+  CHECK(has(r.out, "p=5     48.0 KiB   48.0 KiB   24.0 KiB   12.0 KiB    6.0 KiB"));
+  CHECK(!has(r.out, "breakdown unavailable"));  // the per-layer bytes add up to the built layers
+  CHECK(has(r.out, "wrap     : corners wrapping around the map border stored"));
+  CHECK(has(run("info --range minmax_mipmap").out, "level 6  : 6x4 nodes, 192 B"));
+  CHECK(has(run("info --range safety_zones").out, "zones    : deltas [1, 2, 4, 8, 16, 32]"));
+}
+
+TEST_CASE("oblong info: wrap corners only when some query crosses the map border", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_info");
+  std::vector<float> v(16 * 16);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = float(i % 7) / 6.0f;
+  oblong::test::writeGray((dir / "map.png").string(), 16, 16, v, OIIO::TypeDesc::UINT8);
+  auto scene = [&](const std::string& name, const std::string& tiling) {
+    const std::string p = (dir / name).string();
+    std::ofstream(p) << R"({"meshes": [{"shape": {"type": "plane", "size": 2, "uv": [0.25, 0.25, 0.75, 0.75]},
+                             "displacement": {"map": "map.png", "scale": 0.1, "tiling": )" + tiling + "}}]}";
+    return p;
+  };
+  const Run inside = run("info " + scene("inside.json", "1"));
+  INFO(inside.out << inside.err);
+  REQUIRE(inside.status == 0);
+  CHECK(inside.out.find("wrapping queries no") != std::string::npos);
+  CHECK(inside.out.find("wrap     : none stored") != std::string::npos);
+  const Run tiled = run("info " + scene("tiled.json", "2"));
+  INFO(tiled.out << tiled.err);
+  REQUIRE(tiled.status == 0);
+  CHECK(tiled.out.find("wrapping queries yes (the map is tiled)") != std::string::npos);
+  CHECK(tiled.out.find("wrap     : corners wrapping around the map border stored") != std::string::npos);
 }
 
 TEST_CASE("bad command-line input gives one clear error line", "[cli][bad_input]") {
@@ -79,6 +116,7 @@ TEST_CASE("bad command-line input gives one clear error line", "[cli][bad_input]
       {"render --size banana -o x.png", "--size"},
       {"render --size 8x8 -o /nonexistent/dir/x.png", "/nonexistent/dir/x.png"},
       {"info --range nosuch", "nosuch"},
+      {"render --normals bumpy -o x.png", "--normals"},
   };
   for (const auto& c : cases) {
     const Run r = run(c.args);
