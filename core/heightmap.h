@@ -43,6 +43,7 @@ class HeightMap {
   size_t bytes() const { return texels_.size() * sizeof(float); }
 
   static int wrap(int i, int n) {
+    if (unsigned(i) < unsigned(n)) return i;  // the common case: no division
     const int r = i % n;
     return r < 0 ? r + n : r;
   }
