@@ -259,6 +259,7 @@ void runConformance(const Scene& s, int count) {
 }
 
 const char* kAsteroid = OBLONG_SOURCE_DIR "/scenes/asteroid.json";
+const char* kSphere = OBLONG_SOURCE_DIR "/scenes/sphere.json";  // 3968 triangles, pole caps, u seam
 
 }  // namespace
 
@@ -275,10 +276,15 @@ TEST_CASE("conformance: every combination agrees with the oracles on the asteroi
   runConformance(loadScene(kAsteroid), 100);
 }
 
+TEST_CASE("conformance: every combination agrees with the oracles on a displaced sphere", "[conformance]") {
+  runConformance(loadScene(kSphere), 150);
+}
+
 TEST_CASE("conformance (large): millions of rays", "[conformance][.large]") {
   runConformance(tiledQuadScene(), 10000);
   runConformance(torusScene(), 10000);
   runConformance(loadScene(kAsteroid), 10000);
+  runConformance(loadScene(kSphere), 10000);
 }
 
 TEST_CASE("fixedstep baseline is approximate but finds most hits", "[conformance][fixedstep]") {
