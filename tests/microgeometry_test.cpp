@@ -83,7 +83,7 @@ TEST_CASE("a closed displaced torus leaks no ray shot from inside", "[microgeome
   auto map = std::make_shared<const HeightMap>(proceduralHeightMap(61, 47, 9));  // odd sizes
   torus.displacement = Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)};
   s.meshes.push_back(std::move(torus));
-  EmbreeScene accel(s, AccelOptions{.tessellate = true});
+  EmbreeScene accel(s, AccelOptions{.tessellate = true, .traversal = {}});
   REQUIRE(accel.microTriangles() > 10000);
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
