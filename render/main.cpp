@@ -16,6 +16,7 @@
 #include "render/embree_scene.h"
 #include "render/rays_io.h"
 #include "render/renderer.h"
+#include "render/vulkan/commands.h"
 #include "render/traversal.h"
 #include "strategies/minmax_mipmap.h"
 #include "strategies/range_query.h"
@@ -40,6 +41,9 @@ using namespace oblong;
 namespace {
 
 Scene sceneFrom(const std::string& path) { return path.empty() ? defaultScene() : loadScene(path); }
+
+// --device of render and trace: "cpu" (Embree) or "vulkan" (render/vulkan/commands.h).
+std::string deviceFlag = "cpu";
 
 ivec2 parseSize(const std::string& s) {
   std::smatch m;
@@ -158,6 +162,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   opts.normals = parseShadingNormals(f.normals);
   opts.progress = !f.quiet;
   Stats::reset();
+  if (deviceFlag == "vulkan") return vk::renderCommand(scene, accelOpts, opts, f.out, f.aovs, f.heatmap, f.statsPath);
   EmbreeScene accel(scene, accelOpts);
   RenderResult res = render(scene, accel, opts);
   writeImage(res.aov.color, f.out);
@@ -220,6 +225,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   const AccelOptions accelOpts = flags.resolve(scene);
   const std::vector<Ray> rays = readRays(raysPath);
   Stats::reset();
+  if (deviceFlag == "vulkan") return vk::traceCommand(scene, accelOpts, rays, raysPath, out, statsPath);
   EmbreeScene accel(scene, accelOpts);
   std::vector<Hit> hits(rays.size());
   std::vector<RayCounters> perRay(rays.size());
@@ -406,6 +412,8 @@ int main(int argc, char** argv) {
   render->add_flag("-q,--quiet", rf.quiet, "no progress bar");
   render->add_option("--stats", rf.statsPath, "write configuration, timings, counters and memory as JSON");
   flags.add(render);
+  render->add_option("--device", deviceFlag, "cpu (Embree) | vulkan (ray tracing pipeline, docs/vulkan.md)")
+      ->check(CLI::IsMember({"cpu", "vulkan"}));
 
   auto* trace = app.add_subcommand("trace", "first hit of every ray of a ray file");
   trace->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
@@ -415,6 +423,8 @@ int main(int argc, char** argv) {
   trace->add_option("--threads", threads, "worker threads (0: all cores)");
   trace->add_option("--stats", statsPath, "write configuration, timings, counters and memory as JSON");
   flags.add(trace);
+  trace->add_option("--device", deviceFlag, "cpu (Embree) | vulkan (ray tracing pipeline, docs/vulkan.md)")
+      ->check(CLI::IsMember({"cpu", "vulkan"}));
 
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
   info->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");

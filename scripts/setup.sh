@@ -16,6 +16,17 @@ PKGS=(
   clang libclang-rt-14-dev
 )
 
+# Vulkan ray tracing path (render/vulkan/, issue 7): headers, loader, glslc and
+# spirv-val from bookworm; Mesa's lavapipe (CPU Vulkan with VK_KHR_ray_tracing_pipeline,
+# Mesa >= 24.1) only from bookworm-backports, so the suite is added and the driver is
+# pinned to it below.
+PKGS+=(libvulkan-dev glslc spirv-tools vulkan-tools)
+BACKPORTS=/etc/apt/sources.list.d/bookworm-backports.list
+if [ ! -s "$BACKPORTS" ]; then
+  echo "deb http://deb.debian.org/debian bookworm-backports main" | $SUDO tee "$BACKPORTS" >/dev/null
+  $SUDO apt-get update -q
+fi
+
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -23,6 +34,13 @@ done
 if [ "${#missing[@]}" -gt 0 ]; then
   $SUDO apt-get update -q
   $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# lavapipe from backports (the bookworm one is Mesa 22.3: no ray tracing). Re-run only
+# when the installed driver did not come from backports.
+if ! dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null | grep -q 'bpo'; then
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q --no-install-recommends -t bookworm-backports mesa-vulkan-drivers
 fi
 
 # Debian's OpenImageIO CMake config lists /usr/include/opencv4 as an include

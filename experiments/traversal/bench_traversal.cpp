@@ -5,7 +5,7 @@
 // as the RMIP paper counts them), acceleration-structure memory (MB).
 //
 //   ./build/bench_traversal [--scene scenes/asteroid.json] [--size 256x192]
-//       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+//       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //       --benchmark_out=out.json --benchmark_out_format=json
 //   /usr/bin/python3 experiments/traversal/summarize.py out.json
 //

@@ -1,0 +1,115 @@
+// `--device vulkan` for oblong trace and oblong render (see commands.h).
+#include "render/vulkan/commands.h"
+
+#include "core/error.h"
+#include "core/stats.h"
+#include "render/rays_io.h"
+#include "render/vulkan/vulkan_render.h"
+#include "render/vulkan/vulkan_scene.h"
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace oblong::vk {
+
+namespace {
+
+nlohmann::json countersJson(const RayCounters& c, int64_t rays) {
+  return {{"boxes", c.boxes},
+          {"range_queries", c.rangeQueries},
+          {"inversions", c.inversions},
+          {"cells_marched", c.cellsMarched},
+          {"micro_triangles", c.microTriangles},
+          {"prisms", c.prisms},
+          {"steps", c.steps()},
+          {"steps_per_ray", double(c.steps()) / double(std::max<int64_t>(1, rays))}};
+}
+
+nlohmann::json deviceJson(const VulkanScene& vs) {
+  nlohmann::json j = {{"api", "vulkan"}, {"name", vs.deviceName()}, {"driver", vs.driverInfo()}};
+  for (const auto& m : vs.memory()) j["memory"][m.name] = m.bytes;
+  j["memory_total"] = totalBytes(vs.memory());
+  return j;
+}
+
+void writeJson(const std::string& path, const nlohmann::json& j) {
+  std::ofstream f(path);
+  if (!f) fail(path, "cannot write statistics");
+  f << j.dump(2) << "\n";
+}
+
+}  // namespace
+
+int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector<Ray>& rays,
+                 const std::string& raysPath, const std::string& out, const std::string& statsPath) {
+  VulkanScene vs(scene, opts);
+  std::vector<RayCounters> perRay;
+  double seconds = 0;
+  const std::vector<Hit> hits = vs.trace(rays, &perRay, &seconds);
+  writeHits(out, hits);
+  RayCounters total;
+  size_t found = 0;
+  for (size_t i = 0; i < rays.size(); ++i) total += perRay[i], found += hits[i].valid();
+  const double mrays = double(rays.size()) / std::max(seconds, 1e-9) * 1e-6;
+  fmt::print("oblong trace: {} rays -> {}: {} hits, {} on Vulkan ({}, {}), {:.3f} s, {:.2f} Mrays/s, {:.1f} steps/ray\n",
+             rays.size(), out, found, vs.geometryName(), vs.deviceName(), vs.driverInfo(), seconds, mrays,
+             double(total.steps()) / double(std::max<size_t>(1, rays.size())));
+  if (!statsPath.empty()) {
+    nlohmann::json j;
+    j["scene"] = scene.path;
+    j["rays"] = {{"file", raysPath}, {"count", rays.size()}, {"hits", found}};
+    j["geometry"] = vs.geometryName();
+    j["device"] = deviceJson(vs);
+    j["seconds"] = {{"build", vs.buildSeconds()}, {"trace", seconds}};
+    j["mrays_per_second"] = mrays;
+    j["ray_counters"] = countersJson(total, int64_t(rays.size()));
+    writeJson(statsPath, j);
+  }
+  return 0;
+}
+
+int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOptions& ro, const std::string& out,
+                  const std::string& aovs, const std::string& heatmap, const std::string& statsPath) {
+  VulkanScene vs(scene, opts);
+  const RenderResult res = render(scene, vs, ro);
+  writeImage(res.aov.color, out);
+  if (!aovs.empty()) writeAOVs(res.aov, aovs);
+  if (!heatmap.empty()) writeHeatMap(res.aov, heatmap);
+  const double rays = double(res.primaryRays + res.secondaryRays);
+  const double mrays = rays / std::max(res.seconds, 1e-9) * 1e-6;
+  fmt::print("oblong render: {} -> {}\n", scene.path, out);
+  fmt::print("  device   : Vulkan, {} ({})\n", vs.deviceName(), vs.driverInfo());
+  fmt::print("  geometry : {}, {} base triangles, built in {:.2f} s\n", vs.geometryName(), vs.baseTriangles(),
+             vs.buildSeconds());
+  for (const auto& m : vs.memory()) fmt::print("  memory   : {:<24} {} B\n", m.name, m.bytes);
+  double meanPrimarySteps = 0;
+  for (float st : res.aov.steps) meanPrimarySteps += st;
+  meanPrimarySteps /= double(std::max<size_t>(1, res.aov.steps.size()));
+  fmt::print("  summary  : {}x{} {} spp {}, {:.3f} s tracing, {:.2f} Mrays/s ({} camera + {} secondary rays, {:.1f}% "
+             "hit), {:.1f} steps/camera ray, {:.1f} steps/ray\n",
+             ro.size.x, ro.size.y, ro.spp, integratorName(ro.integrator), res.seconds, mrays, res.primaryRays,
+             res.secondaryRays, 100.0 * double(res.hits) / double(std::max<int64_t>(1, res.primaryRays)),
+             meanPrimarySteps, double(res.counters.steps()) / std::max(1.0, rays));
+  if (!statsPath.empty()) {
+    nlohmann::json j;
+    j["scene"] = scene.path;
+    j["geometry"] = vs.geometryName();
+    j["device"] = deviceJson(vs);
+    j["image"] = {{"width", ro.size.x}, {"height", ro.size.y}, {"file", out}};
+    j["integrator"] = integratorName(ro.integrator);
+    j["normals"] = shadingNormalsName(ro.normals);
+    j["spp"] = ro.spp;
+    j["seed"] = ro.seed;
+    j["seconds"] = {{"build", vs.buildSeconds()}, {"render", res.seconds}};
+    j["rays"] = {{"primary", res.primaryRays}, {"secondary", res.secondaryRays}, {"hits", res.hits}};
+    j["mrays_per_second"] = mrays;
+    j["steps_per_camera_ray"] = meanPrimarySteps;
+    j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
+    writeJson(statsPath, j);
+  }
+  return 0;
+}
+
+}  // namespace oblong::vk

@@ -1,0 +1,26 @@
+// `--device vulkan` for oblong trace and oblong render (render/main.cpp calls these
+// after it has read the scene, the strategy flags and the rays). Without the Vulkan
+// target (CMake option OBLONG_VULKAN off, or Vulkan / glslc not installed), the stubs
+// in commands_stub.cpp fail with one line saying so.
+#pragma once
+
+#include "core/scene.h"
+#include "render/embree_scene.h"
+#include "render/renderer.h"
+
+#include <string>
+#include <vector>
+
+namespace oblong::vk {
+
+// Writes the hits CSV (render/rays_io.h format) and prints one summary line; returns
+// the exit status. Throws oblong::Error (one line) on any problem.
+int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector<Ray>& rays,
+                 const std::string& raysPath, const std::string& out, const std::string& statsPath);
+
+// Renders (any integrator, render/vulkan/vulkan_render.h); writes the image and the
+// optional AOVs / heat map / stats.
+int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOptions& ro, const std::string& out,
+                  const std::string& aovs, const std::string& heatmap, const std::string& statsPath);
+
+}  // namespace oblong::vk

@@ -1,0 +1,1139 @@
+// The per-ray, per-prism traversal (render/traversal.h's RayPatch) in GLSL, for the
+// intersection shader. Mirrors the CPU code function by function (same names, same
+// order of operations, double where the CPU uses double, float where it uses float).
+//
+// What runs: RayPatch::run for well-posed triangles — ray / inflated prism crossings,
+// the curve's monotone pieces (ψ turning points, inversion), a stack of pieces front to
+// back, RMIP range query + conservative box + ray clip per piece, inversion during
+// traversal, midpoint2d splits (closed-form crossing of ψ with the middle line, else the
+// t-midpoint by inversion), texel marching of the cells within ε of a piece — and the
+// projection-free box subdivision (runBoxOnly / processBox) wherever the CPU uses it.
+// Differences from the CPU (docs/vulkan.md): the inverter is newton with its cubic
+// fallback as on the CPU, but the cubic's std::cbrt / acos / cos are GLSL's (not bit-
+// identical; every curve point is validated by its residual either way); the
+// per-ray counters are kept, the statistics registry is not.
+//
+// NIR inlines every function call, and lavapipe's compile time grows quickly with the
+// inlined size, so each large piece of code has one call site: the cells to test come
+// from one generator (nextCell: a box range or a marched piece), tested at one place in
+// runLoop.
+
+#define kInfF uintBitsToFloat(0x7f800000u)
+#define kInfD double(kInfF)
+
+// ---- per invocation state (RayPatch's members; g_tri, g_mesh in prism.rint) ----------
+float g_tmin, g_tmax;             // the ray's [tmin, tmax] (float, as Ray)
+dvec3 g_O, g_D, g_invD;
+dvec3 g_boxLo, g_boxHi;           // prismBox_
+double g_boxPad, g_tAbs;
+dvec2 g_dvd;
+ivec2 g_cellLo, g_cellHi;
+dvec2 g_sbLo, g_sbHi;
+// ClosestHit
+bool g_found;
+float g_hitT;
+MicroVertex g_hv0, g_hv1, g_hv2;
+vec3 g_hb;
+// counters
+int g_boxes, g_rangeQueries, g_inversions, g_cells, g_microTris;
+bool g_boxOnly;
+
+// ---- ClosestHit::test ----------------------------------------------------------------
+void testMicro(MicroVertex v0, MicroVertex v1, MicroVertex v2) {
+  float t;
+  vec3 b;
+  float hi = g_found ? (g_hitT < g_tmax ? g_hitT : g_tmax) : g_tmax;  // std::min(tmax, t)
+  if (intersectMicro(v0.p, v1.p, v2.p, g_tmin, hi, t, b) && (!g_found || t < g_hitT)) {
+    g_hitT = t;
+    g_found = true;
+    g_hv0 = v0;
+    g_hv1 = v1;
+    g_hv2 = v2;
+    g_hb = b;
+  }
+}
+
+// ---- BoxD::clip (slab test in double) -------------------------------------------------
+void clipBox(dvec3 lo, dvec3 hi, inout double t0, inout double t1) {
+  for (int k = 0; k < 3; ++k) {
+    if (isinf(g_invD[k])) {
+      if (g_O[k] < lo[k] || g_O[k] > hi[k]) t0 = kInfD;
+      continue;
+    }
+    precise double a = (lo[k] - g_O[k]) * g_invD[k], b = (hi[k] - g_O[k]) * g_invD[k];
+    if (a > b) {
+      double s = a;
+      a = b;
+      b = s;
+    }
+    t0 = t0 < a ? a : t0;  // std::max
+    t1 = b < t1 ? b : t1;  // std::min
+  }
+}
+
+// ---- RMIP range query (strategies/rmip.h Rmip::rawRange, range_query.h wrapAxis) ----
+void wrapAxis(int a0, int a1, int n, out int s, out int e) {
+  if (a1 - a0 + 1 >= n) {
+    s = 0;
+    e = n - 1;
+    return;
+  }
+  s = wrapIndex(a0, n);
+  e = s + (a1 - a0);
+}
+void toPixels(int a0, int a1, int size, int n, out int s, out int e) {
+  wrapAxis(a0, a1, size, s, e);
+  int f = g_mesh.rmipF;
+  if (f == 1) return;
+  e = e < size ? e / f : n + (e - size) / f;
+  s /= f;
+  if (e - s + 1 >= n) {
+    s = 0;
+    e = n - 1;
+  }
+}
+vec2 rmipBlock(int x0, int x1, int y0, int y1) {
+  int p = min(findMSB(x1 - x0 + 1), g_mesh.rmipP), q = min(findMSB(y1 - y0 + 1), g_mesh.rmipQ);
+  ivec4 L = rmipLayers[g_mesh.rmipLayers + uint(p * (g_mesh.rmipQ + 1) + q)];  // offset, nx, shiftX, shiftY
+  int lx = 1 << p, ly = 1 << q;
+  int rw = g_mesh.rmipW, rh = g_mesh.rmipH;
+  uint base = g_mesh.rmipData + uint(L.x);
+  vec2 r = vec2(kInfF, -kInfF);
+  for (int cy = y0;; cy += ly) {
+    bool lastY = cy + ly - 1 >= y1;
+    if (lastY) cy = y1 - ly + 1;
+    uint row = uint((cy >= rh ? cy - rh : cy) >> L.w) * uint(L.y);
+    for (int cx = x0;; cx += lx) {
+      bool lastX = cx + lx - 1 >= x1;
+      if (lastX) cx = x1 - lx + 1;
+      vec2 v = rmipData[base + row + uint((cx >= rw ? cx - rw : cx) >> L.z)];
+      r.x = v.x < r.x ? v.x : r.x;
+      r.y = r.y < v.y ? v.y : r.y;
+      if (lastX) break;
+    }
+    if (lastY) break;
+  }
+  return r;
+}
+vec2 rmipRawRange(int sx0, int sy0, int sx1, int sy1) {
+  int x0, x1, y0, y1;
+  int rw = g_mesh.rmipW, rh = g_mesh.rmipH;
+  toPixels(sx0, sx1, g_mesh.W, rw, x0, x1);
+  toPixels(sy0, sy1, g_mesh.H, rh, y0, y1);
+  // Wrapping corners stored, or no crossing: one block. Else split at the border (one
+  // call site for rmipBlock: the shader is inlined).
+  bool one = g_mesh.rmipWrap != 0 || (x1 < rw && y1 < rh);
+  int xa[2] = int[2](x0, 0), xb[2] = int[2](one ? x1 : min(x1, rw - 1), x1 - rw);
+  int ya[2] = int[2](y0, 0), yb[2] = int[2](one ? y1 : min(y1, rh - 1), y1 - rh);
+  int nb = one || y1 < rh ? 1 : 2, na = one || x1 < rw ? 1 : 2;
+  vec2 r = vec2(kInfF, -kInfF);
+  for (int b = 0; b < nb; ++b)
+    for (int a = 0; a < na; ++a) {
+      vec2 v = rmipBlock(xa[a], xb[a], ya[b], yb[b]);
+      r.x = min(r.x, v.x);
+      r.y = max(r.y, v.y);
+    }
+  return r;
+}
+// Displacement::toHeight
+vec2 toHeight(vec2 raw) {
+  precise float a = g_mesh.scale * (raw.x + g_mesh.bias), b = g_mesh.scale * (raw.y + g_mesh.bias);
+  return vec2(min(a, b), max(a, b));
+}
+
+// ---- boxOverRect (render/rect_bounds.h) -----------------------------------------------
+void boxOverRect(double m, dvec2 lo, dvec2 hi, double hlo, double hhi, double pad, out dvec3 blo, out dvec3 bhi) {
+  precise dvec3 Nlo, Nhi;
+  for (int k = 0; k < 3; ++k) {
+    precise double px0 = TRI.PX[k] * lo.x, px1 = TRI.PX[k] * hi.x, py0 = TRI.PY[k] * lo.y, py1 = TRI.PY[k] * hi.y;
+    blo[k] = TRI.Pc[k] + min(px0, px1) + min(py0, py1);
+    bhi[k] = TRI.Pc[k] + max(px0, px1) + max(py0, py1);
+    precise double nx0 = TRI.NX[k] * lo.x, nx1 = TRI.NX[k] * hi.x, ny0 = TRI.NY[k] * lo.y, ny1 = TRI.NY[k] * hi.y;
+    Nlo[k] = TRI.Nc[k] + min(nx0, nx1) + min(ny0, ny1);
+    Nhi[k] = TRI.Nc[k] + max(nx0, nx1) + max(ny0, ny1);
+  }
+  precise double d2 = 0.0, c2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    precise double g = max(max(0.0, Nlo[k]), -Nhi[k]);
+    d2 += g * g;
+    precise double c = max(abs(Nlo[k]), abs(Nhi[k]));
+    c2 += c * c;
+  }
+  precise double nMin = max(m, sqrt(d2)) * (1.0 - 1e-12);
+  precise double nMax = min(1.0, sqrt(c2)) * (1.0 + 1e-12);
+  precise double klo = hlo < 0.0 ? hlo / nMin : hlo / nMax;
+  precise double khi = hhi > 0.0 ? hhi / nMin : hhi / nMax;
+  for (int k = 0; k < 3; ++k) {
+    precise double a = klo * Nlo[k], b = klo * Nhi[k], c = khi * Nlo[k], d = khi * Nhi[k];
+    blo[k] += min(min(a, b), min(c, d));
+    bhi[k] += max(max(a, b), max(c, d));
+  }
+  precise double mag = max(max(max(abs(blo.x), abs(blo.y)), max(abs(blo.z), abs(bhi.x))), max(abs(bhi.y), abs(bhi.z)));
+  precise double p = pad + 1e-14 * mag;
+  blo -= dvec3(p);
+  bhi += dvec3(p);
+}
+
+// ---- RayPatch helpers -----------------------------------------------------------------
+double slack(double t) { return 1e-5 * abs(t) + g_tAbs; }
+double bestLimit() { return g_found ? double(g_hitT) + slack(double(g_hitT)) : double(g_tmax) + slack(double(g_tmax)); }
+
+dvec2 dirLocal() {
+  dvec3 N = TRI.N13;
+  precise double det = dot(TRI.PX, cross(TRI.PY, N));
+  if (!(abs(det) > 0.0)) return dvec2(1.0);
+  return dvec2(dot(g_D, cross(TRI.PY, N)) / det, dot(TRI.PX, cross(g_D, N)) / det);
+}
+
+// clipToCells: the ray interval through the box of the micro-geometry over local cells.
+bool clipToCells(ivec2 clo, ivec2 chi, inout double t0, inout double t1) {
+  ivec2 o = TRI.origin;
+  ++g_rangeQueries;
+  vec2 h = toHeight(rmipRawRange(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
+  dvec2 lo = max(dvec2(clo), g_sbLo), hi = min(dvec2(chi + 1), g_sbHi);
+  dvec3 blo, bhi;
+  boxOverRect(double(TRI.minNormalLength), lo, hi, double(h.x), double(h.y), g_boxPad, blo, bhi);
+  blo = max(blo, g_boxLo);
+  bhi = min(bhi, g_boxHi);
+  ++g_boxes;
+  if (blo.x > bhi.x || blo.y > bhi.y || blo.z > bhi.z) return false;
+  clipBox(blo, bhi, t0, t1);
+  return t0 <= t1;
+}
+
+void testCell(int i, int j) {
+  ++g_cells;
+  g_microTris += microCell(i + TRI.origin.x, j + TRI.origin.y);
+}
+
+// ---- doubles as glm computes them ------------------------------------------------------
+double dotD(dvec3 a, dvec3 b) {
+  precise double r = a.x * b.x + a.y * b.y + a.z * b.z;
+  return r;
+}
+dvec3 crossD(dvec3 x, dvec3 y) {
+  precise dvec3 r = dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
+  return r;
+}
+double det3D(dvec3 a, dvec3 b, dvec3 c) { return dotD(a, crossD(b, c)); }
+double lengthD(dvec3 v) { return sqrt(dotD(v, v)); }
+bool finiteD(double x) { return !isinf(x) && !isnan(x); }
+double copysignD(double m, double s) {  // std::copysign
+  bool neg = (unpackDouble2x32(s).y & 0x80000000u) != 0u;
+  return neg ? -abs(m) : abs(m);
+}
+
+// LocalFrame (render/psi.h)
+dvec2 frameBary(dvec2 p) {
+  precise dvec2 r = TRI.bc + TRI.bX * p.x + TRI.bY * p.y;
+  return r;
+}
+dvec2 frameLocal(dvec2 b) {
+  precise dvec2 r = TRI.sc + TRI.sU * b.x + TRI.sV * b.y;
+  return r;
+}
+dvec3 frameP(dvec2 b) {
+  precise dvec3 r = TRI.p0d + TRI.e1 * b.x + TRI.e2 * b.y;
+  return r;
+}
+dvec3 frameN(dvec2 b) {
+  precise dvec3 r = TRI.n0d + TRI.f1 * b.x + TRI.f2 * b.y;
+  return r;
+}
+
+// ---- quadraticRoots (render/psi.h) -----------------------------------------------------
+int quadraticRoots(double q2, double q1, double q0, out double w[2], out double pad[2]) {
+  w[0] = 0.0;
+  w[1] = 0.0;
+  pad[0] = 0.0;
+  pad[1] = 0.0;
+  double scale = max(max(abs(q2), abs(q1)), abs(q0));
+  if (!(scale > 0.0) || !finiteD(scale)) return scale == 0.0 ? -1 : 0;
+  double e = 1e-14;
+  int n = 0;
+  if (abs(q2) <= e * scale) {
+    if (abs(q1) <= e * scale) return abs(q0) <= e * scale ? -1 : 0;
+    w[n++] = -q0 / q1;
+  } else {
+    precise double disc = q1 * q1 - 4.0 * q2 * q0;
+    precise double discErr = 1e-13 * (q1 * q1 + 4.0 * abs(q2 * q0));
+    if (disc < 0.0) {
+      if (disc < -discErr) return 0;
+      disc = 0.0;
+    }
+    precise double q = -0.5 * (q1 + copysignD(sqrt(disc), q1));
+    if (q != 0.0) {
+      w[n++] = q / q2;
+      w[n++] = q0 / q;
+    } else {
+      w[n++] = -q1 / (2.0 * q2);
+    }
+  }
+  for (int k = 0; k < n; ++k) {
+    precise double x = w[k];
+    precise double delta = 1e-13 * (abs(q2) * x * x + abs(q1 * x) + abs(q0));
+    precise double slope = abs(2.0 * q2 * x + q1);
+    precise double p = slope > 0.0 ? delta / slope : kInfD;
+    if (abs(q2) > 0.0) p = min(p, sqrt(delta / abs(q2)));
+    pad[k] = 4.0 * p + 1e-14 * abs(x);
+  }
+  return n;
+}
+
+// ---- ψ (render/psi.h Psi) --------------------------------------------------------------
+double g_c0, g_cX, g_cY, g_cXX, g_cXY, g_cYY;
+
+void psiMake() {
+  precise dvec3 A0 = TRI.Pc - g_O;
+  g_c0 = dotD(g_D, crossD(A0, TRI.Nc));
+  g_cX = dotD(g_D, crossD(A0, TRI.NX) + crossD(TRI.PX, TRI.Nc));
+  g_cY = dotD(g_D, crossD(A0, TRI.NY) + crossD(TRI.PY, TRI.Nc));
+  g_cXX = dotD(g_D, crossD(TRI.PX, TRI.NX));
+  g_cYY = dotD(g_D, crossD(TRI.PY, TRI.NY));
+  g_cXY = dotD(g_D, crossD(TRI.PX, TRI.NY) + crossD(TRI.PY, TRI.NX));
+}
+double psiEval(dvec2 p) {
+  precise double r = g_c0 + p.x * (g_cX + g_cXX * p.x + g_cXY * p.y) + p.y * (g_cY + g_cYY * p.y);
+  return r;
+}
+dvec2 psiGrad(dvec2 p) {
+  precise dvec2 r = dvec2(g_cX + 2.0 * g_cXX * p.x + g_cXY * p.y, g_cY + g_cXY * p.x + 2.0 * g_cYY * p.y);
+  return r;
+}
+void psiOnLine(int axis, double c, out double q2, out double q1, out double q0) {
+  precise double a2, a1, a0;
+  if (axis == 0) {
+    a2 = g_cYY;
+    a1 = g_cY + g_cXY * c;
+    a0 = g_c0 + c * (g_cX + g_cXX * c);
+  } else {
+    a2 = g_cXX;
+    a1 = g_cX + g_cXY * c;
+    a0 = g_c0 + c * (g_cY + g_cYY * c);
+  }
+  q2 = a2;
+  q1 = a1;
+  q0 = a0;
+}
+
+// rayParamAt: t and s where the displacement line through local p comes closest to the ray.
+bool rayParamAt(dvec2 p, out double t, out double s) {
+  t = 0.0;
+  s = 0.0;
+  dvec2 b = frameBary(p);
+  precise dvec3 A = frameP(b) - g_O;
+  dvec3 N = frameN(b);
+  precise double dd = dotD(g_D, g_D), nn = dotD(N, N), dn = dotD(g_D, N);
+  precise double den = dd * nn - dn * dn;
+  if (!(den > 1e-24 * dd * nn)) return false;
+  precise double da = dotD(g_D, A), na = dotD(N, A);
+  precise double tt = (nn * da - dn * na) / den, ss = (dn * da - dd * na) / den;
+  t = tt;
+  s = ss;
+  return finiteD(t) && finiteD(s);
+}
+
+// monotoneSplits with turningPoints: sorted ray parameters in (tIn, tOut) where the
+// curve may turn.
+int monotoneSplits(double tIn, double tOut, out double ts[4]) {
+  for (int k = 0; k < 4; ++k) ts[k] = 0.0;
+  int m = 0;
+  for (int L = 0; L < 2; ++L) {
+    precise double a = L == 0 ? 2.0 * g_cXX : g_cXY, b = L == 0 ? g_cXY : 2.0 * g_cYY, c = L == 0 ? g_cX : g_cY;
+    precise double nn = a * a + b * b;
+    if (!(nn > 0.0)) continue;
+    precise dvec2 Q = -c / nn * dvec2(a, b);
+    precise dvec2 R = dvec2(-b, a) / sqrt(nn);
+    precise double q0 = psiEval(Q);
+    precise dvec2 g = psiGrad(Q);
+    precise double q1 = g.x * R.x + g.y * R.y;
+    precise double q2 = g_cXX * R.x * R.x + g_cXY * R.x * R.y + g_cYY * R.y * R.y;
+    double tau[2], pad[2];
+    int nr = quadraticRoots(q2, q1, q0, tau, pad);
+    for (int k = 0; k < nr; ++k) {
+      precise dvec2 cand = Q + tau[k] * R;
+      double t, s;
+      if (!rayParamAt(cand, t, s)) continue;
+      if (t > tIn && t < tOut) ts[m++] = t;
+    }
+  }
+  for (int i = 1; i < m; ++i)
+    for (int j = i; j > 0 && ts[j] < ts[j - 1]; --j) {
+      double x = ts[j];
+      ts[j] = ts[j - 1];
+      ts[j - 1] = x;
+    }
+  int u = 0;
+  for (int i = 0; i < m; ++i)
+    if (u == 0 || ts[i] != ts[u - 1]) ts[u++] = ts[i];
+  return u;
+}
+
+// ---- the inflated prism and its crossings (render/prism.cpp Prism) -------------------
+dvec3 g_pq[3], g_pn[3];
+dvec2 g_pbv[3];
+double g_pa, g_pb;
+
+// Prism::inflated(F, a, b, delta)
+void makePrism(double a, double b, double delta) {
+  g_pbv[0] = dvec2(-delta, -delta);
+  g_pbv[1] = dvec2(1.0 + 2.0 * delta, -delta);
+  g_pbv[2] = dvec2(-delta, 1.0 + 2.0 * delta);
+  for (int k = 0; k < 3; ++k) {
+    g_pq[k] = frameP(g_pbv[k]);
+    g_pn[k] = frameN(g_pbv[k]);
+  }
+  g_pa = a;
+  g_pb = b;
+}
+// Prism::bounds() padded.
+void prismBounds(double pad, out dvec3 lo, out dvec3 hi) {
+  lo = dvec3(kInfD);
+  hi = dvec3(-kInfD);
+  for (int k = 0; k < 6; ++k) {
+    precise dvec3 v = g_pq[k >> 1] + ((k & 1) != 0 ? g_pb : g_pa) * g_pn[k >> 1];
+    lo = min(lo, v);
+    hi = max(hi, v);
+  }
+  lo -= dvec3(pad);
+  hi += dvec3(pad);
+}
+
+struct Crossing {
+  double t;
+  dvec2 bary;
+  double s;
+};
+
+bool lexLess(dvec3 p, dvec3 n, dvec3 q, dvec3 m) {
+  for (int k = 0; k < 3; ++k)
+    if (p[k] != q[k]) return p[k] < q[k];
+  for (int k = 0; k < 3; ++k)
+    if (n[k] != m[k]) return n[k] < m[k];
+  return false;
+}
+
+// Prism::crossings: caps (Möller–Trumbore) and walls (quadratic in the edge parameter).
+int prismCrossings(out Crossing first, out Crossing last) {
+  first = Crossing(0.0, dvec2(0.0), 0.0);
+  last = first;
+  int count = 0;
+  double tol = 1e-9;
+  double sTol = tol * (abs(g_pa) + abs(g_pb) + 1e-3);
+  for (int f = 0; f < 5; ++f) {
+    double t = 0.0, s = 0.0;
+    dvec2 bary = dvec2(0.0);
+    bool ok = false;
+    if (f < 2) {
+      s = f == 1 ? g_pb : g_pa;
+      precise dvec3 v0 = g_pq[0] + s * g_pn[0], v1 = g_pq[1] + s * g_pn[1], v2 = g_pq[2] + s * g_pn[2];
+      precise dvec3 e1 = v1 - v0, e2 = v2 - v0;
+      dvec3 pv = crossD(g_D, e2);
+      double det = dotD(e1, pv);
+      if (det != 0.0) {
+        precise double inv = 1.0 / det;
+        precise dvec3 tv = g_O - v0;
+        precise double b1 = dotD(tv, pv) * inv;
+        dvec3 qv = crossD(tv, e1);
+        precise double b2 = dotD(g_D, qv) * inv;
+        if (!(b1 < -tol || b2 < -tol || b1 + b2 > 1.0 + tol)) {
+          precise double tt = dotD(e2, qv) * inv;
+          precise dvec2 bb = g_pbv[0] + b1 * (g_pbv[1] - g_pbv[0]) + b2 * (g_pbv[2] - g_pbv[0]);
+          t = tt;
+          bary = bb;
+          ok = true;
+          if (finiteD(t)) {
+            Crossing c = Crossing(t, bary, s);
+            if (count == 0 || t < first.t) first = c;
+            if (count == 0 || t > last.t) last = c;
+            ++count;
+          }
+        }
+      }
+      continue;
+    }
+    int e = f - 2;
+    int A = e, B = (e + 1) % 3;
+    if (lexLess(g_pq[B], g_pn[B], g_pq[A], g_pn[A])) {
+      int x = A;
+      A = B;
+      B = x;
+    }
+    precise dvec3 c = g_O - g_pq[A], ed = g_pq[B] - g_pq[A], g = g_pn[B] - g_pn[A];
+    precise double k0 = det3D(c, g_pn[A], g_D);
+    precise double k1 = det3D(c, g, g_D) - det3D(ed, g_pn[A], g_D);
+    precise double k2 = -det3D(ed, g, g_D);
+    double tau[2], pad[2];
+    int nr = quadraticRoots(k2, k1, k0, tau, pad);
+    for (int r = 0; r < nr; ++r) {
+      double ta = tau[r];
+      if (ta < -tol - pad[r] || ta > 1.0 + tol + pad[r]) continue;
+      double tc = clamp(ta, 0.0, 1.0);
+      precise dvec3 Pt = g_pq[A] + tc * ed, Nt = g_pn[A] + tc * g;
+      precise dvec3 Av = Pt - g_O;
+      precise double dd = dotD(g_D, g_D), nn = dotD(Nt, Nt), dn = dotD(g_D, Nt);
+      precise double den = dd * nn - dn * dn;
+      if (!(den > 1e-24 * dd * nn)) continue;
+      precise double da = dotD(g_D, Av), na = dotD(Nt, Av);
+      precise double tt = (nn * da - dn * na) / den;
+      precise double ss = (dn * da - dd * na) / den;
+      if (ss < g_pa - sTol || ss > g_pb + sTol) continue;
+      precise dvec2 bb = g_pbv[A] + tc * (g_pbv[B] - g_pbv[A]);
+      if (finiteD(tt)) {
+        Crossing cr = Crossing(tt, bb, ss);
+        if (count == 0 || tt < first.t) first = cr;
+        if (count == 0 || tt > last.t) last = cr;
+        ++count;
+      }
+    }
+  }
+  return count;
+}
+
+// ---- curve points (RayPatch::makePoint, invertAt) ------------------------------------
+struct CurvePoint {
+  double t;
+  dvec2 uv;
+  dvec2 pad;
+};
+dvec2 pieceLo(CurvePoint a, CurvePoint b) { return min(a.uv - a.pad, b.uv - b.pad); }
+dvec2 pieceHi(CurvePoint a, CurvePoint b) { return max(a.uv + a.pad, b.uv + b.pad); }
+
+dvec2 g_eps;
+
+bool makePoint(double t, dvec2 b, double s, out CurvePoint outp) {
+  outp = CurvePoint(t, dvec2(0.0), dvec2(0.0));
+  double dom = TRI.domainB;
+  if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1.0 + dom)) return false;
+  if (!(s >= TRI.domainS0 && s <= TRI.domainS1)) return false;
+  precise dvec3 X = g_O + t * g_D;
+  precise dvec3 G = frameP(b) + s * frameN(b);
+  double mag = max(max(max(abs(X.x), abs(X.y)), max(abs(X.z), abs(G.x))), max(abs(G.y), abs(G.z)));
+  precise double r = lengthD(G - X) + 1e-14 * mag;
+  precise dvec2 db = TRI.kb * r * 1.001;
+  if (!(db.x + db.y < 0.01) || !(TRI.ks * r < 0.01 * (TRI.domainS1 - TRI.domainS0) + 1e-300)) return false;
+  outp.uv = frameLocal(b);
+  precise dvec2 pad = TRI.kxy * (r * 1.001) + 1e-9 * (1.0 + abs(outp.uv));
+  outp.pad = pad;
+  return finiteD(outp.uv.x) && finiteD(outp.uv.y);
+}
+
+// ---- the inverter: newton (inversion/newton.h) with its cubic fallback (cubic.h) -----
+float det3F(vec3 a, vec3 b, vec3 c) {
+  precise vec3 x = crossF(b, c);
+  precise float r = a.x * x.x + a.y * x.y + a.z * x.z;
+  return r;
+}
+float dotF(vec3 a, vec3 b) {
+  precise float r = a.x * b.x + a.y * b.y + a.z * b.z;
+  return r;
+}
+float copysignF(float m, float s) { return (floatBitsToUint(s) & 0x80000000u) != 0u ? -abs(m) : abs(m); }
+bool finiteF(float x) { return !isinf(x) && !isnan(x); }
+
+// inv::polishPolyRoot<float>
+float polishPolyRoot(float a0, float a1, float a2, float a3, float x) {
+  precise float f = ((a3 * x + a2) * x + a1) * x + a0;
+  for (int k = 0; k < 2; ++k) {
+    precise float df = (3.0 * a3 * x + 2.0 * a2) * x + a1;
+    if (!(abs(df) > 0.0)) break;
+    precise float nx = x - f / df;
+    precise float nf = ((a3 * nx + a2) * nx + a1) * nx + a0;
+    if (!(abs(nf) < abs(f))) break;
+    x = nx;
+    f = nf;
+  }
+  return x;
+}
+
+// inv::polyRoots<float>: real roots of a3 x³ + a2 x² + a1 x + a0 (degree-dropping rule,
+// Cardano / trigonometric form, deflation, polishing, the root filter). std::cbrt,
+// std::acos and std::cos are GLSL's here: not bit-identical to the C library's, which
+// only moves the start of the polishing Newton step.
+int polyRoots(float a0, float a1, float a2, float a3, out float x[3]) {
+  x[0] = 0.0;
+  x[1] = 0.0;
+  x[2] = 0.0;
+  const float eps = 1e-6;
+  float M = max(max(abs(a0), abs(a1)), max(abs(a2), abs(a3)));
+  if (!(M > 0.0) || !finiteF(M)) return 0;
+  precise float big = 1.0 / eps;
+  bool cubic = abs(a2) < big * abs(a3) || abs(a1) < big * big * abs(a3) || abs(a0) < big * big * big * abs(a3);
+  bool quadratic = abs(a1) < big * abs(a2) || abs(a0) < big * big * abs(a2);
+  int n = 0;
+  precise float c0 = 0.0, c1 = 0.0, c2 = 0.0;  // the quadratic to solve, if any
+  bool quad = false;
+  if (cubic) {
+    precise float A = a2 / a3, B = a1 / a3, C = a0 / a3;
+    precise float A3 = A / 3.0;
+    precise float p = B - A * A3, q = 2.0 * A3 * A3 * A3 - A3 * B + C;
+    precise float D = q * q / 4.0 + p * p * p / 27.0;
+    precise float r;
+    if (D > 0.0) {
+      precise float w = -q / 2.0 - copysignF(sqrt(D), q);
+      precise float t = w == 0.0 ? 0.0 : copysignF(pow(abs(w), 1.0 / 3.0), w);  // std::cbrt
+      r = (t != 0.0 ? t - p / (3.0 * t) : 0.0) - A3;
+    } else if (p == 0.0) {
+      r = -A3;
+    } else {
+      precise float rr = sqrt(-p / 3.0);
+      precise float c = clamp(3.0 * q / (2.0 * p) * sqrt(-3.0 / p), -1.0, 1.0);
+      precise float phi = acos(c) / 3.0;
+      const float k2pi3 = 2.0943951023931954923;
+      r = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        precise float t = 2.0 * rr * cos(phi - float(k) * k2pi3) - A3;
+        if (abs(t) > abs(r)) r = t;
+      }
+    }
+    if (!finiteF(r)) return 0;
+    r = polishPolyRoot(a0, a1, a2, a3, r);
+    x[n++] = r;
+    precise float b2 = a2 + a3 * r;
+    quad = true;
+    if (r != 0.0 && abs(r) * r * r * abs(a3) >= abs(a0)) {
+      c0 = -a0;
+      c1 = -(a1 + a0 / r);
+      c2 = a3 * r;
+    } else {
+      c0 = a1 + r * b2;
+      c1 = b2;
+      c2 = a3;
+    }
+  } else if (quadratic) {
+    quad = true;
+    c0 = a0;
+    c1 = a1;
+    c2 = a2;
+  } else if (abs(a1) > eps * M) {
+    x[n++] = polishPolyRoot(a0, a1, a2, a3, -a0 / a1);
+  }
+  if (quad) {  // inv::quadRoots(c0, c1, c2, eps)
+    precise float D = c1 * c1 - 4.0 * c2 * c0;
+    if (D < 0.0 && D > -16.0 * eps * (c1 * c1 + abs(4.0 * c2 * c0))) D = 0.0;
+    if (D >= 0.0) {
+      precise float q = -0.5 * (c1 + copysignF(sqrt(D), c1));
+      float y[2] = float[2](0.0, 0.0);
+      int m;
+      if (q == 0.0) {
+        m = 1;
+      } else {
+        y[0] = q / c2;
+        y[1] = c0 / q;
+        m = 2;
+      }
+      for (int i = 0; i < m; ++i) x[n++] = polishPolyRoot(a0, a1, a2, a3, y[i]);
+    }
+  }
+  const float tol = 1e-2;
+  int kept = 0;
+  for (int i = 0; i < n; ++i) {
+    precise float xi = x[i], ax = abs(xi);
+    precise float f = ((a3 * xi + a2) * xi + a1) * xi + a0;
+    precise float scale = ((abs(a3) * ax + abs(a2)) * ax + abs(a1)) * ax + abs(a0);
+    if (finiteF(xi) && abs(f) <= tol * scale) x[kept++] = xi;
+  }
+  return kept;
+}
+
+// Newton::solve<float>: inv::newtonSolve from (1/3, 1/3, 0) (tolerance 1e-5, 10
+// iterations); if that is not converged or outside T by more than 1e-5, inv::cubicSolve
+// (the root whose offset-triangle barycentrics are inside T, then one polishing Newton
+// step). One Newton-step site for both passes.
+void invertFloat(vec3 X, out vec2 bary, out float h) {
+  precise vec3 e1 = TRI.p[1] - TRI.p[0], e2 = TRI.p[2] - TRI.p[0];
+  precise vec3 n0 = TRI.n[0], f1 = TRI.n[1] - TRI.n[0], f2 = TRI.n[2] - TRI.n[0];
+  precise vec3 e3 = e2 - e1;
+  precise float L = sqrt(max(max(dotF(e1, e1), dotF(e2, e2)), dotF(e3, e3)));
+  precise vec3 W = X - TRI.p[0];
+  precise float u = 1.0 / 3.0, v = 1.0 / 3.0, s = 0.0;
+  const float tol = 1e-5;
+  bool conv = false;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) {
+      precise float hh = s * lengthF(n0 + u * f1 + v * f2);
+      precise float outside = max(max(0.0, -u), max(-v, u + v - 1.0));
+      bool converged = conv && finiteF(u) && finiteF(v) && finiteF(hh);
+      if (converged && outside <= 1e-5) break;  // Newton's result stands
+      // inv::cubicSolve<float>(X, T, 1)
+      precise float iL = 1.0 / L;
+      precise vec3 e1s = e1 * iL, e2s = e2 * iL, w = W * iL;
+      precise float a0 = det3F(e1s, e2s, w);
+      precise float a1 = det3F(f1, e2s, w) + det3F(e1s, f2, w) - det3F(e1s, e2s, n0);
+      precise float a2 = det3F(f1, f2, w) - det3F(f1, e2s, n0) - det3F(e1s, f2, n0);
+      precise float a3 = -det3F(f1, f2, n0);
+      float roots[3];
+      int nr = polyRoots(a0, a1, a2, a3, roots);
+      const float tieEps = 1e-5;
+      bool found = false;
+      precise float bu = 0.0, bv = 0.0, bs = 0.0, bOut = 0.0;
+      for (int i = 0; i < nr; ++i) {
+        precise float sg = roots[i];
+        precise vec3 A = e1s + sg * f1, B = e2s + sg * f2, R = w - sg * n0;
+        precise vec3 nS = crossF(A, B);
+        precise float d = dotF(nS, nS);
+        if (!(d > 0.0)) continue;
+        precise float cu = dotF(crossF(R, B), nS) / d, cv = dotF(crossF(A, R), nS) / d;
+        if (!finiteF(cu) || !finiteF(cv)) continue;
+        precise float o = max(max(0.0, -cu), max(-cv, cu + cv - 1.0));
+        bool better = !found || o < bOut - tieEps || (o <= bOut + tieEps && abs(sg) < abs(bs));
+        if (better) {
+          found = true;
+          bu = cu;
+          bv = cv;
+          bs = sg;
+          bOut = o;
+        }
+      }
+      if (!found) {  // finish(F, T, 1/3, 1/3, 0, false, 0)
+        u = 1.0 / 3.0;
+        v = 1.0 / 3.0;
+        s = 0.0;
+        break;
+      }
+      u = bu;
+      v = bv;
+      s = bs * L;
+    }
+    for (int it = 0; it < (pass == 0 ? 10 : 1); ++it) {  // inv::newtonStep
+      precise vec3 N = n0 + u * f1 + v * f2;
+      precise vec3 r = e1 * u + e2 * v + s * N - W;
+      precise vec3 a = e1 + s * f1, b = e2 + s * f2;
+      precise vec3 bxN = crossF(b, N);
+      precise float D = dotF(a, bxN);
+      if (!(abs(D) > 0.0)) break;
+      precise float inv = 1.0 / D;
+      precise float du = -dotF(r, bxN) * inv;
+      precise float dv = -dotF(a, crossF(r, N)) * inv;
+      precise float ds = -dotF(a, crossF(b, r)) * inv;
+      if (!finiteF(du) || !finiteF(dv) || !finiteF(ds)) break;
+      u += du;
+      v += dv;
+      s += ds;
+      if (pass == 0 && max(abs(du), abs(dv)) <= tol && abs(ds) <= tol * (L + abs(s))) {
+        conv = true;
+        break;
+      }
+    }
+  }
+  precise float hh = s * lengthF(n0 + u * f1 + v * f2);
+  bary = vec2(u, v);
+  h = hh;
+}
+
+bool invertAt(double t, out CurvePoint outp) {
+  outp = CurvePoint(t, dvec2(0.0), dvec2(0.0));
+  ++g_inversions;
+  precise dvec3 X = g_O + t * g_D;
+  vec2 bary;
+  float h;
+  invertFloat(vec3(X), bary, h);
+  dvec2 b = dvec2(bary);
+  double nl = lengthD(frameN(b));
+  if (!(nl > 0.0) || isinf(h) || isnan(h)) return false;
+  return makePoint(t, b, double(h) / nl, outp);
+}
+
+// RayPatch::crossing (SplitContext): the curve point on {axis = c}, unique, strictly
+// between the piece's ends.
+bool crossingAt(CurvePoint pa, CurvePoint pb, int axis, double c, out CurvePoint outp) {
+  outp = pa;
+  double q2, q1, q0, w[2], rp[2];
+  psiOnLine(axis, c, q2, q1, q0);
+  int n = quadraticRoots(q2, q1, q0, w, rp);
+  if (n <= 0) return false;
+  int mi = 1 - axis;
+  dvec2 lo = pieceLo(pa, pb), hi = pieceHi(pa, pb);
+  int found = 0;
+  for (int k = 0; k < n; ++k) {
+    if (w[k] < lo[mi] - rp[k] || w[k] > hi[mi] + rp[k]) continue;
+    dvec2 uv = axis == 0 ? dvec2(c, w[k]) : dvec2(w[k], c);
+    double t, s;
+    if (!rayParamAt(uv, t, s)) continue;
+    if (!(t > pa.t && t < pb.t)) continue;
+    CurvePoint cp;
+    if (!makePoint(t, frameBary(uv), s, cp)) continue;
+    outp = cp;
+    ++found;
+  }
+  return found == 1;
+}
+
+// ---- the stack ---------------------------------------------------------------------------
+struct Entry {
+  CurvePoint a, b;  // curve mode
+  ivec4 cells;      // box mode: local cell range clo, chi
+  double ta, tb;    // box mode: ray interval
+  bool box;
+};
+Entry g_st[OBLONG_STACK];
+int g_sp;
+
+void pushPiece(CurvePoint a, CurvePoint b) {
+  g_st[g_sp].a = a;
+  g_st[g_sp].b = b;
+  g_st[g_sp].box = false;
+  ++g_sp;
+}
+void pushBox(ivec2 lo, ivec2 hi, double ta, double tb) {
+  g_st[g_sp].cells = ivec4(lo, hi);
+  g_st[g_sp].ta = ta;
+  g_st[g_sp].tb = tb;
+  g_st[g_sp].box = true;
+  ++g_sp;
+}
+
+// RayPatch::snap: local cells touching [lo, hi], clipped to T's cells.
+bool snapCells(dvec2 lo, dvec2 hi, out ivec2 clo, out ivec2 chi) {
+  double lim = 1e9;
+  for (int k = 0; k < 2; ++k) {
+    precise double eta = 1e-9 * (1.0 + abs(lo[k]) + abs(hi[k]));
+    clo[k] = int(clamp(floor(lo[k] - eta), -lim, lim));
+    chi[k] = int(clamp(floor(hi[k] + eta), -lim, lim));
+  }
+  clo = max(clo, g_cellLo);
+  chi = min(chi, g_cellHi);
+  return clo.x <= chi.x && clo.y <= chi.y;
+}
+
+// ---- the cells to test: one generator, one call site of the micro-geometry ------------
+// Mode 1: a cell range (RayPatch::testCells order); mode 2: texel marching of a piece
+// (RayPatch::march, minorAt), column by column.
+int g_gen;
+ivec2 g_gLo, g_gHi;
+int g_gi, g_gj, g_gsx, g_gsy;
+CurvePoint g_ma, g_mb;
+int g_mAx, g_mSa, g_mSm, g_mK, g_mJ, g_mJ0, g_mJ1;
+bool g_mCol;
+
+void startCells(ivec2 clo, ivec2 chi) {
+  g_gen = 1;
+  g_gLo = clo;
+  g_gHi = chi;
+  g_gsx = g_dvd.x >= 0.0 ? 1 : -1;
+  g_gsy = g_dvd.y >= 0.0 ? 1 : -1;
+  g_gi = g_gsx > 0 ? clo.x : chi.x;
+  g_gj = g_gsy > 0 ? clo.y : chi.y;
+}
+
+void startMarch(CurvePoint a, CurvePoint b) {
+  precise dvec2 d = b.uv - a.uv;
+  int ax = abs(d.x) >= abs(d.y) ? 0 : 1, mi = 1 - ax;
+  ivec2 clo, chi;
+  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  g_gen = 2;
+  g_ma = a;
+  g_mb = b;
+  g_mAx = ax;
+  g_gLo = clo;
+  g_gHi = chi;
+  g_mSa = d[ax] >= 0.0 ? 1 : -1;
+  g_mSm = d[mi] >= 0.0 ? 1 : -1;
+  g_mK = g_mSa > 0 ? clo[ax] : chi[ax];
+  g_mCol = false;
+}
+
+// RayPatch::minorAt: the minor coordinate range of the marched piece where its major
+// coordinate is c.
+void minorAt(double c, out double wlo, out double whi) {
+  int ax = g_mAx, mi = 1 - ax;
+  dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
+  wlo = kInfD;
+  whi = -kInfD;
+  for (int k = 0; k < 2; ++k) {
+    CurvePoint e = k == 0 ? g_ma : g_mb;
+    if (abs(c - e.uv[ax]) <= e.pad[ax] * 1.0000001 + 1e-12) {
+      wlo = min(wlo, e.uv[mi] - e.pad[mi]);
+      whi = max(whi, e.uv[mi] + e.pad[mi]);
+    }
+  }
+  double q2, q1, q0, w[2], rp[2];
+  psiOnLine(ax, c, q2, q1, q0);
+  int n = quadraticRoots(q2, q1, q0, w, rp);
+  if (n < 0) {
+    wlo = lo[mi];
+    whi = hi[mi];
+    return;
+  }
+  for (int k = 0; k < n; ++k)
+    if (w[k] >= lo[mi] - rp[k] && w[k] <= hi[mi] + rp[k]) {
+      wlo = min(wlo, w[k] - rp[k]);
+      whi = max(whi, w[k] + rp[k]);
+    }
+  if (!(wlo <= whi)) {
+    wlo = lo[mi];
+    whi = hi[mi];
+  }
+  wlo = max(wlo, lo[mi]);
+  whi = min(whi, hi[mi]);
+}
+
+bool nextCell(out int ci, out int cj) {
+  ci = 0;
+  cj = 0;
+  if (g_gen == 1) {
+    if (g_gsy > 0 ? g_gj > g_gHi.y : g_gj < g_gLo.y) return false;
+    ci = g_gi;
+    cj = g_gj;
+    g_gi += g_gsx;
+    if (g_gsx > 0 ? g_gi > g_gHi.x : g_gi < g_gLo.x) {
+      g_gi = g_gsx > 0 ? g_gLo.x : g_gHi.x;
+      g_gj += g_gsy;
+    }
+    return true;
+  }
+  int ax = g_mAx, mi = 1 - ax;
+  for (;;) {
+    if (!g_mCol) {
+      if (g_mSa > 0 ? g_mK > g_gHi[ax] : g_mK < g_gLo[ax]) return false;
+      dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
+      precise double c0 = max(double(g_mK) - g_eps[ax], lo[ax]), c1 = min(double(g_mK + 1) + g_eps[ax], hi[ax]);
+      if (c0 > c1) {
+        g_mK += g_mSa;
+        continue;
+      }
+      double r[4];
+      for (int k = 0; k < 2; ++k) minorAt(k == 0 ? c0 : c1, r[2 * k], r[2 * k + 1]);
+      precise double wlo = min(r[0], r[2]) - g_eps[mi], whi = max(r[1], r[3]) + g_eps[mi];
+      precise double eta = 1e-9 * (1.0 + abs(wlo) + abs(whi));
+      g_mJ0 = max(int(floor(wlo - eta)), g_gLo[mi]);
+      g_mJ1 = min(int(floor(whi + eta)), g_gHi[mi]);
+      g_mJ = g_mSm > 0 ? g_mJ0 : g_mJ1;
+      g_mCol = true;
+    }
+    if (g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0) {
+      ci = ax == 0 ? g_mK : g_mJ;
+      cj = ax == 0 ? g_mJ : g_mK;
+      g_mJ += g_mSm;
+      return true;
+    }
+    g_mCol = false;
+    g_mK += g_mSa;
+  }
+  return false;
+}
+
+// ---- RayPatch::processPiece (midpoint2d) and processBox -----------------------------------
+bool pieceSmall(CurvePoint a, CurvePoint b) {
+  dvec2 ext = pieceHi(a, b) - pieceLo(a, b);
+  dvec2 pads = a.pad + b.pad;
+  int la = ext.x >= ext.y ? 0 : 1;
+  return ext[la] <= double(g_mesh.marchingScale) || pads[la] > 0.25 * ext[la];
+}
+bool strictlyBetween(CurvePoint a, CurvePoint b, int axis, double c) {
+  double x0 = min(a.uv[axis], b.uv[axis]), x1 = max(a.uv[axis], b.uv[axis]);
+  return c > x0 && c < x1;
+}
+
+void processPiece(CurvePoint a, CurvePoint b) {
+  if (a.t > bestLimit()) return;
+  if (pieceSmall(a, b)) {
+    startMarch(a, b);
+    return;
+  }
+  ivec2 clo, chi;
+  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  double t0 = a.t, t1 = min(b.t, bestLimit());
+  if (!clipToCells(clo, chi, t0, t1)) return;
+  // Up to three inversions, at one call site: the clipped ends (Fig. 5a: inversion
+  // during traversal, their projections can give a much smaller rectangle), then the
+  // midpoint2d split — the crossing with the middle of the longer side, else of the
+  // other side (split::middleCrossing), else the t-midpoint by inversion.
+  precise double minGain = 1e-3 * (b.t - a.t);
+  CurvePoint m;
+  bool ok = false;
+  for (int e = g_mesh.inversionInTraversal != 0 ? 0 : 2; e < 3; ++e) {
+    bool need;
+    double t;
+    if (e < 2) {
+      need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
+      t = e == 0 ? t0 : t1;
+    } else {
+      if (pieceSmall(a, b) || g_sp + 2 > OBLONG_STACK) {  // overflow: correct, just not hierarchical
+        startMarch(a, b);
+        return;
+      }
+      dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
+      dvec2 ext = hi - lo;
+      int first = ext.x >= ext.y ? 0 : 1;
+      for (int k = 0; k < 2 && !ok; ++k) {
+        int axis = k == 0 ? first : 1 - first;
+        precise double c = 0.5 * (lo[axis] + hi[axis]);
+        if (!strictlyBetween(a, b, axis, c)) c = 0.5 * (a.uv[axis] + b.uv[axis]);
+        ok = strictlyBetween(a, b, axis, c) && crossingAt(a, b, axis, c, m);
+      }
+      need = !ok;
+      t = 0.5 * (a.t + b.t);
+    }
+    CurvePoint q;
+    if (need && invertAt(t, q)) {
+      if (e == 0) a = q;
+      else if (e == 1) b = q;
+      else {
+        m = q;
+        ok = true;
+      }
+    }
+  }
+  if (!ok) {
+    pushBox(clo, chi, t0, t1);
+    return;
+  }
+  pushPiece(m, b);
+  pushPiece(a, m);
+}
+
+void processBox(ivec2 clo, ivec2 chi, double ta, double tb) {
+  double limit = bestLimit();
+  if (ta > limit) return;
+  ivec2 n = chi - clo + 1;
+  if (float(max(n.x, n.y)) <= max(1.0, g_mesh.marchingScale)) {
+    startCells(clo, chi);
+    return;
+  }
+  double t0 = ta, t1 = min(tb, limit);
+  if (!clipToCells(clo, chi, t0, t1)) return;
+  if (g_sp + 2 > OBLONG_STACK) {
+    startCells(clo, chi);
+    return;
+  }
+  int ax = n.x >= n.y ? 0 : 1;
+  int mid = clo[ax] + (n[ax] - 1) / 2;
+  ivec2 aHi = chi, bLo = clo;
+  aHi[ax] = mid;
+  bLo[ax] = mid + 1;
+  // Lower half first when the ray runs towards +axis (order matters for speed only).
+  if (g_dvd[ax] >= 0.0) {
+    pushBox(bLo, chi, t0, t1);
+    pushBox(clo, aHi, t0, t1);
+  } else {
+    pushBox(clo, aHi, t0, t1);
+    pushBox(bLo, chi, t0, t1);
+  }
+}
+
+// Front to back until the stack and the current cell generator are empty.
+void runLoop() {
+  for (;;) {
+    if (g_gen != 0) {
+      int ci, cj;
+      if (nextCell(ci, cj)) {
+        testCell(ci, cj);
+        continue;
+      }
+      g_gen = 0;
+    }
+    if (g_sp == 0) break;
+    --g_sp;
+    Entry e = g_st[g_sp];
+    if (e.box) processBox(e.cells.xy, e.cells.zw, e.ta, e.tb);
+    else processPiece(e.a, e.b);
+  }
+}
+
+// RayPatch::runBoxOnly's set-up: the whole of T's cells as one box entry.
+void setupBoxOnly() {
+  g_boxOnly = true;
+  g_sp = 0;
+  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = bestLimit();
+  clipBox(g_boxLo, g_boxHi, t0, t1);
+  if (!(t0 <= t1)) return;
+  g_dvd = dirLocal();
+  pushBox(g_cellLo, g_cellHi, t0, t1);
+}
+
+// RayPatch::run up to the stack: 0 = no hit possible, 1 = box-only, 2 = pieces pushed.
+int setupCurve() {
+  if (TRI.wellPosed == 0) return 1;
+  // The inflated prism (with the margin for the watertight test's rounding): the one
+  // TraversalMesh precomputes for origins within the budget, else the ray's own.
+  precise double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
+  bool pre = maxO <= TRI.budget;
+  precise double rayErr = 1e-6 * (TRI.maxP + (pre ? TRI.budget : maxO) + abs(TRI.a) + abs(TRI.b));
+  precise double extraB = (TRI.kb.x + TRI.kb.y) * 2.0 * rayErr, extraS = TRI.ks * 2.0 * rayErr;
+  makePrism(TRI.a - TRI.inflateS - extraS, TRI.b + TRI.inflateS + extraS, TRI.inflateB + extraB);
+  dvec3 plo, phi;
+  prismBounds(pre ? TRI.vertexErr + rayErr : g_boxPad, plo, phi);
+  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = double(g_tmax) + slack(double(g_tmax));
+  clipBox(plo, phi, t0, t1);
+  if (!(t0 <= t1)) return 0;
+  Crossing first, last;
+  int nc = prismCrossings(first, last);
+  if (nc == 0) return 0;  // the line misses the inflated prism
+  if (nc < 2) return 1;   // grazed
+  double tIn = max(first.t, double(g_tmin) - slack(double(g_tmin)));
+  double tOut = min(last.t, double(g_tmax) + slack(double(g_tmax)));
+  if (!(tIn <= tOut)) return 0;
+  psiMake();
+  g_dvd = dirLocal();
+  double ts[4];
+  int ns = monotoneSplits(tIn, tOut, ts);
+  // Curve points: the two ends (prism crossings, or inverted where the ray starts or
+  // ends inside), then the turning points; one call site each for makePoint/invertAt.
+  CurvePoint pts[6];
+  bool okEnds = true;
+  for (int k = 0; k < ns + 2; ++k) {
+    if (k == 2 && !okEnds) return 1;
+    Crossing c = k == 0 ? first : last;
+    double t = k == 0 ? tIn : (k == 1 ? tOut : ts[k - 2]);
+    bool ok;
+    CurvePoint p;
+    if (k < 2 && t == c.t) ok = makePoint(c.t, c.bary, c.s, p);
+    else ok = invertAt(t, p);
+    if (!ok && k >= 2) return 1;
+    okEnds = okEnds && ok;
+    pts[k == 0 ? 0 : (k == 1 ? ns + 1 : k - 1)] = p;
+  }
+  if (!okEnds) return 1;
+  g_sp = 0;
+  for (int k = ns; k >= 0; --k) pushPiece(pts[k], pts[k + 1]);
+  return 2;
+}
+
+// RayPatch::run.
+bool runPatch() {
+  g_gen = 0;
+  g_sp = 0;
+  g_eps = TRI.eps + TRI.kxy * (2.0 * (1e-6 * (TRI.maxP + max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z)) +
+                                              abs(TRI.a) + abs(TRI.b))));
+  int r = setupCurve();
+  if (r == 1) setupBoxOnly();
+  if (r != 0) runLoop();
+  return g_found;
+}
+
+// RayPatch's constructor: per ray and triangle constants.
+void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
+  g_tmin = tmin;
+  g_tmax = tmax;
+  g_O = dvec3(o);
+  g_D = dvec3(d);
+  g_invD = 1.0 / g_D;
+  g_cellLo = TRI.cellLo;
+  g_cellHi = TRI.cellHi;
+  g_sbLo = TRI.sbLo;
+  g_sbHi = TRI.sbHi;
+  double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
+  bool pre = maxO <= TRI.budget;
+  // RayMargins::make(P, maxAbsVertex(T), maxO): this ray's own pads.
+  precise double rayErr = 1e-6 * (TRI.maxP + maxO + abs(TRI.a) + abs(TRI.b));
+  g_boxPad = TRI.vertexErr + rayErr;
+  g_tAbs = 8.0 * g_boxPad / lengthD(g_D);
+  if (pre) {  // TraversalMesh::prismBoxes, padded for the budget
+    g_boxLo = TRI.boxPadLo;
+    g_boxHi = TRI.boxPadHi;
+  } else {
+    g_boxLo = TRI.boxLo - dvec3(g_boxPad);
+    g_boxHi = TRI.boxHi + dvec3(g_boxPad);
+  }
+  g_dvd = dvec2(1.0);
+  makeWatertightRay(o, d);
+  g_found = false;
+  g_hitT = kInfF;
+  g_boxes = 0;
+  g_rangeQueries = 0;
+  g_inversions = 0;
+  g_cells = 0;
+  g_microTris = 0;
+  g_boxOnly = false;
+}

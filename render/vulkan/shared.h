@@ -1,0 +1,142 @@
+// Layouts and binding indices shared by the Vulkan host code (render/vulkan/*.cpp) and
+// the GLSL shaders (render/vulkan/shaders/), as in nvpro-samples' host_device.h: one
+// definition, so the two sides cannot drift. Buffers use the scalar block layout
+// (VK_EXT_scalar_block_layout, core in Vulkan 1.2): C++ and GLSL then place members
+// identically as long as every struct is ordered doubles first, then 4-byte members,
+// and its size is a multiple of 8 (checked by static_asserts in vulkan_scene.cpp).
+#ifndef OBLONG_VULKAN_SHARED_H
+#define OBLONG_VULKAN_SHARED_H
+
+#ifdef __cplusplus
+#include <glm/glm.hpp>
+
+#include <cstdint>
+namespace oblong::vkgpu {
+using glm::dvec2;
+using glm::dvec3;
+using glm::ivec2;
+using glm::ivec4;
+using glm::vec2;
+using glm::vec3;
+using glm::vec4;
+using uint = uint32_t;
+#endif
+
+// Descriptor set 0.
+#define OBLONG_BIND_TLAS 0         // accelerationStructureEXT
+#define OBLONG_BIND_RAYS 1         // RayGpu[]      (input)
+#define OBLONG_BIND_HITS 2         // HitGpu[]      (output)
+#define OBLONG_BIND_COUNTERS 3     // CountersGpu[] (output, per ray)
+#define OBLONG_BIND_TRIANGLES 4    // TriGpu[]      (displaced triangles, all meshes)
+#define OBLONG_BIND_MESHES 5       // MeshGpu[]     (indexed by the instance's custom index)
+#define OBLONG_BIND_TEXELS 6       // float[]       (height maps, raw texels, row-major)
+#define OBLONG_BIND_RMIP_DATA 7    // vec2[]        (RMIP entries: min, max of raw texels)
+#define OBLONG_BIND_RMIP_LAYERS 8  // ivec4[]       (per layer: offset, nx, shiftX, shiftY)
+#define OBLONG_BIND_PLAIN_INDEX 9  // uint[]        (plain meshes: 3 vertex indices a triangle)
+#define OBLONG_BIND_PLAIN_UV 10    // vec2[]        (plain meshes: uv per vertex)
+#define OBLONG_BIND_PLAIN_POS 11   // float[]       (plain meshes: xyz per vertex)
+#define OBLONG_BIND_COUNT 12
+
+// Hit kinds of the SBT: hit group 0 = displaced prisms (procedural), 1 = plain triangles.
+#define OBLONG_HITGROUP_PRISM 0
+#define OBLONG_HITGROUP_TRIANGLES 1
+
+// Traversal stack entries per ray and prism (render/traversal.h RayPatch::kStack).
+#define OBLONG_STACK 128
+
+// One ray, laid out as the CPU's Ray (o, d, tmin, tmax): ray buffers are copied as is.
+struct RayGpu {
+  vec3 o;
+  vec3 d;
+  float tmin;
+  float tmax;
+};
+
+// First hit of one ray (mesh = -1: miss).
+struct HitGpu {
+  float t;
+  int mesh;
+  int prim;
+  float u, v;  // texture coordinates of the hit (before tiling)
+  vec3 ng;     // unit geometric normal of the hit (micro-)triangle
+};
+
+// Per-ray work, the CPU's RayCounters (summed over the prisms a ray enters).
+struct CountersGpu {
+  int prisms, boxes, rangeQueries, inversions, cellsMarched, microTriangles;
+  int boxOnlyPrisms;  // prisms traversed by projection-free box subdivision
+  int pad;
+};
+
+// One displaced base triangle: DisplacedTriangle, its PrismParams, LocalFrame and the
+// MicroCells constants (render/traversal.h, render/psi.h, core/microgeometry.h),
+// precomputed on the host by the very code the CPU runs.
+struct TriGpu {
+  // LocalFrame: P = Pc + PX X + PY Y, N = Nc + NX X + NY Y over local sample coordinates.
+  dvec3 Pc, PX, PY, Nc, NX, NY;
+  dvec3 N13;                // F.N(1/3, 1/3) (RayPatch::dirLocal)
+  dvec3 p0d, e1, e2, n0d, f1, f2;  // F.P(b) = p0 + e1 u + e2 v, F.N(b) = n0 + f1 u + f2 v
+  dvec3 boxLo, boxHi;       // exact prism box, unpadded (Prism::exact(T, a, b).bounds())
+  dvec3 boxPadLo, boxPadHi; // TraversalMesh::prismBoxes (padded for origins within budget)
+  dvec2 bc, bX, bY;         // barycentrics (u, v) = bc + bX X + bY Y
+  dvec2 sc, sU, sV;         // local sample coordinates (X, Y) = sc + sU u + sV v
+  dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates
+  dvec2 S[3];               // MicroCells::S_: vertices in (absolute) sample coordinates
+  dvec2 kb, kxy, eps;       // PrismParams: residual bounds and the cell dilation ε
+  double vertexErr, a, b, budget, maxP, minNormalLength;
+  double inflateB, inflateS, ks, domainB, domainS0, domainS1;
+  vec3 p[3], n[3];          // DisplacedTriangle (float, as MicroCells reads it)
+  vec2 t[3];
+  vec4 uvToBary;            // glm::mat2 columns: m[0][0], m[0][1], m[1][0], m[1][1]
+  vec4 edgeSigma;           // MicroCells::E_[e].sigma (±1), w unused
+  float uvArea2, pad0;
+  ivec2 origin;             // LocalFrame::origin
+  ivec2 cellLo, cellHi;     // T's cells, local (cellsOverlapping − origin)
+  ivec4 edgeA, edgeB;       // MicroCells::E_[e].A / .B (canonical endpoint order)
+  int valid, wellPosed;
+};
+
+// One mesh of the scene (the TLAS instance's custom index).
+struct MeshGpu {
+  uint triOffset;   // first TriGpu of this mesh (displaced)
+  uint texelOffset; // first texel of its height map
+  int W, H;         // map size
+  float scale, bias;
+  vec2 tiling;
+  uint rmipData, rmipLayers;  // offsets into the RMIP buffers
+  int rmipF, rmipW, rmipH, rmipP, rmipQ, rmipWrap;  // Rmip: downsample, pixels, top layers, wrap stored
+  float marchingScale;
+  int inversionInTraversal;  // TraversalConfig::inversionInTraversal
+  int displaced;
+  int pad;
+  uint indexOffset;  // plain: first index (3 per triangle)
+  uint vertexOffset; // plain: first vertex
+};
+
+// Intersection -> closest-hit attributes (displaced prisms).
+struct HitAttrGpu {
+  vec2 uv;
+  vec3 ng;
+};
+
+// Payload of traceRayEXT.
+struct PayloadGpu {
+  float t;
+  int mesh;
+  int prim;
+  float u, v;
+  vec3 ng;
+};
+
+struct PushGpu {
+  uint rayOffset;
+  uint rayCount;
+  uint anyHit;  // occlusion rays: stop at the first hit (gl_RayFlagsTerminateOnFirstHitEXT)
+  uint pad;
+};
+
+#ifdef __cplusplus
+}  // namespace oblong::vkgpu
+#endif
+
+#endif

@@ -1,0 +1,286 @@
+// Rendering on Vulkan (see vulkan_render.h). The helpers below are copies of
+// render/renderer.cpp's (private to that file); tests/vulkan_test.cpp compares the
+// images of the two paths for every integrator.
+#include "render/vulkan/vulkan_render.h"
+
+#include "core/error.h"
+#include "render/camera.h"
+
+namespace oblong::vk {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// PCG32 as render/renderer.cpp seeds it per pixel sample.
+struct Rng {
+  uint64_t state, inc;
+  Rng(uint64_t seed, uint64_t stream) : state(0), inc((stream << 1u) | 1u) {
+    next();
+    state += seed;
+    next();
+  }
+  uint32_t next() {
+    const uint64_t old = state;
+    state = old * 6364136223846793005ULL + inc;
+    const uint32_t x = uint32_t(((old >> 18u) ^ old) >> 27u), rot = uint32_t(old >> 59u);
+    return (x >> rot) | (x << ((-rot) & 31));
+  }
+  float uniform() { return float(next() >> 8) * (1.0f / 16777216.0f); }
+};
+
+void basis(const vec3& n, vec3& t, vec3& b) {
+  const float s = std::copysign(1.0f, n.z);
+  const float a = -1.0f / (s + n.z), c = n.x * n.y * a;
+  t = vec3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+  b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+vec3 cosineSample(const vec3& n, Rng& rng) {
+  const float u1 = rng.uniform(), u2 = rng.uniform();
+  const float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
+  vec3 t, b;
+  basis(n, t, b);
+  return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0f, 1.0f - u1)) * n);
+}
+
+float spawnEps(const vec3& p) { return 1e-4f * std::max(1.0f, std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)})); }
+
+vec3 spawn(const vec3& p, const vec3& ngf, const vec3& d) {
+  return p + (glm::dot(ngf, d) < 0 ? -spawnEps(p) : spawnEps(p)) * ngf;
+}
+
+vec2 baryOfPoint(const DisplacedTriangle& T, const vec3& p) {
+  const vec3 e1 = T.p[1] - T.p[0], e2 = T.p[2] - T.p[0], w = p - T.p[0];
+  const float d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
+  const float w1 = glm::dot(w, e1), w2 = glm::dot(w, e2), den = d11 * d22 - d12 * d12;
+  if (!(den > 0)) return vec2(1.0f / 3.0f);
+  return vec2((d22 * w1 - d12 * w2) / den, (d11 * w2 - d12 * w1) / den);
+}
+
+float sceneDiagonal(const Scene& s) {
+  AABB b;
+  for (const auto& sm : s.meshes)
+    for (const vec3& p : sm.mesh.positions) b.extend(p);
+  return b.isEmpty() ? 1.0f : glm::length(b.extent());
+}
+
+struct Shader {
+  const Scene& scene;
+  const RenderOptions& opts;
+  std::vector<std::vector<DisplacedTriangle>> triangles;  // smooth normals only
+
+  // Tracer::normals of render/renderer.cpp.
+  void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
+    ngf = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
+    ns = ngf;
+    if (opts.normals != ShadingNormals::Smooth) return;
+    const SceneMesh& sm = scene.meshes[size_t(h.mesh)];
+    const DisplacedTriangle& T = triangles[size_t(h.mesh)][size_t(h.prim)];
+    vec2 b = sm.displacement ? T.baryOfUV(h.uv) : baryOfPoint(T, r.at(h.t));
+    b = glm::clamp(b, vec2(0.0f), vec2(1.0f));
+    if (b.x + b.y > 1.0f) b /= b.x + b.y;
+    const vec3 n = smoothDisplacedNormal(T, sm.displacement ? &*sm.displacement : nullptr, b.x, b.y);
+    if (n == vec3(0.0f)) return;
+    ns = glm::dot(n, ngf) < 0 ? -n : n;
+  }
+};
+
+// One camera sample's path (Tracer::shade's locals, kept across the wavefront rounds).
+struct Path {
+  Rng rng{0, 0};
+  vec3 L{0.0f}, beta{1.0f}, pos{0.0f}, nrm{0.0f}, geo{0.0f};
+  int mesh = -1;
+  bool alive = false;
+};
+
+}  // namespace
+
+RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions& opts) {
+  if (opts.size.x <= 0 || opts.size.y <= 0) fail("render", "image size must be positive");
+  if (opts.spp <= 0) fail("--spp", "must be >= 1, got {}", opts.spp);
+  const int W = opts.size.x, H = opts.size.y, spp = opts.spp;
+  const size_t npx = size_t(W) * H, ns = npx * size_t(spp);
+  RenderResult res;
+  AOVs& aov = res.aov;
+  aov.color = Image(W, H);
+  aov.depth.assign(npx, kInfinity);
+  aov.normal.assign(npx, vec3(0.0f));
+  aov.steps.assign(npx, 0.0f);
+  aov.rangeQueries.assign(npx, 0.0f);
+  aov.inversions.assign(npx, 0.0f);
+  aov.cellsMarched.assign(npx, 0.0f);
+  Shader sh{scene, opts, {}};
+  if (opts.normals == ShadingNormals::Smooth)
+    for (const SceneMesh& sm : scene.meshes) {
+      std::vector<DisplacedTriangle>& t = sh.triangles.emplace_back(sm.mesh.triangles.size());
+      for (size_t i = 0; i < t.size(); ++i) t[i] = sm.mesh.triangle(i);
+    }
+  const float aoRadius = opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene);
+
+  // Camera rays: sample 0 through the pixel centre, the others jittered.
+  const PinholeCamera cam(scene.camera, opts.size);
+  std::vector<Path> paths(ns);
+  std::vector<Ray> rays(ns);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const size_t px = size_t(y) * W + x;
+      for (int s = 0; s < spp; ++s) {
+        Path& p = paths[px * spp + s];
+        p.rng = Rng(opts.seed * 0x9E3779B97F4A7C15ULL + px, uint64_t(s));
+        const float jx = s == 0 ? 0.5f : p.rng.uniform(), jy = s == 0 ? 0.5f : p.rng.uniform();
+        rays[px * spp + s] = cam.generate(x + jx, y + jy);
+      }
+    }
+  std::vector<RayCounters> camera, more;
+  double seconds = 0;
+  const std::vector<Hit> hits = accel.trace(rays, &camera, &seconds);
+  res.seconds += seconds;
+  for (const RayCounters& c : camera) res.counters += c;
+
+  // First hits: primary colour, AOVs, and the start of ao / path.
+  std::vector<vec3> value(ns, vec3(0.0f));
+  std::vector<size_t> owner;  // path of each queued secondary ray
+  std::vector<Ray> queue;
+  for (size_t k = 0; k < ns; ++k) {
+    const Ray& r = rays[k];
+    const Hit& h = hits[k];
+    Path& p = paths[k];
+    if (!h.valid()) {
+      value[k] = opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
+      continue;
+    }
+    ++res.hits;
+    vec3 ng, n;
+    sh.normals(r, h, ng, n);
+    if (k % spp == 0) {
+      aov.depth[k / spp] = h.t;
+      aov.normal[k / spp] = n;
+    }
+    if (opts.integrator == Integrator::Primary) {
+      value[k] = 0.5f * n + 0.5f;
+    } else if (opts.integrator == Integrator::AO) {
+      const vec3 pt = r.at(h.t);
+      const vec3 d = cosineSample(n, p.rng);
+      if (glm::dot(d, ng) <= 0) continue;  // below the geometric surface: occluded
+      owner.push_back(k);
+      queue.push_back(Ray{spawn(pt, ng, d), d, 0.0f, aoRadius});
+    } else {
+      p.pos = r.at(h.t), p.nrm = n, p.geo = ng, p.mesh = h.mesh, p.alive = true;
+    }
+  }
+  auto traceQueue = [&](bool anyHit) {
+    std::vector<Hit> out = accel.trace(queue, &more, &seconds, anyHit);
+    res.seconds += seconds;
+    res.secondaryRays += int64_t(queue.size());
+    for (const RayCounters& c : more) res.counters += c;
+    return out;
+  };
+  if (opts.integrator == Integrator::AO && !queue.empty()) {
+    const std::vector<Hit> occ = traceQueue(true);
+    for (size_t q = 0; q < queue.size(); ++q) value[owner[q]] = vec3(occ[q].valid() ? 0.0f : 1.0f);
+  }
+  if (opts.integrator == Integrator::Path) {
+    for (int depth = 0;; ++depth) {
+      // Direct light at every live vertex (Tracer::direct): one shadow ray per light
+      // that can light it, then the sum over the lights in order.
+      struct Shadow {
+        size_t path;
+        vec3 contribution;
+      };
+      std::vector<Shadow> shadows;
+      queue.clear();
+      for (size_t k = 0; k < ns; ++k) {
+        const Path& p = paths[k];
+        if (!p.alive) continue;
+        const vec3 albedo = scene.meshes[size_t(p.mesh)].albedo;
+        for (const Light& light : scene.lights) {
+          vec3 wi;
+          float dist = kInfinity, falloff = 1.0f;
+          if (light.type == Light::Type::Directional) {
+            wi = -glm::normalize(light.direction);
+          } else {
+            wi = light.position - p.pos;
+            dist = glm::length(wi);
+            if (!(dist > 0)) continue;
+            wi /= dist;
+            falloff = 1.0f / (dist * dist);
+          }
+          const float cosTheta = glm::dot(p.nrm, wi);
+          if (cosTheta <= 0 || glm::dot(p.geo, wi) <= 0) continue;
+          shadows.push_back({k, albedo * light.intensity * (cosTheta * falloff / kPi)});
+          queue.push_back(Ray{p.pos + spawnEps(p.pos) * p.geo, wi, 0.0f, dist * (1.0f - 1e-4f)});
+        }
+      }
+      if (!queue.empty()) {
+        const std::vector<Hit> occ = traceQueue(true);
+        std::vector<vec3> direct(ns, vec3(0.0f));
+        for (size_t q = 0; q < shadows.size(); ++q)
+          if (!occ[q].valid()) direct[shadows[q].path] += shadows[q].contribution;
+        for (size_t k = 0; k < ns; ++k)
+          if (paths[k].alive) paths[k].L += paths[k].beta * direct[k];
+      }
+      // Continue or end each path; queue the bounce rays.
+      owner.clear();
+      queue.clear();
+      for (size_t k = 0; k < ns; ++k) {
+        Path& p = paths[k];
+        if (!p.alive) continue;
+        if (depth + 1 >= opts.maxDepth) {
+          p.alive = false;
+          continue;
+        }
+        p.beta *= scene.meshes[size_t(p.mesh)].albedo;
+        if (depth >= 3) {
+          const float q = std::min(0.95f, std::max({p.beta.x, p.beta.y, p.beta.z}));
+          if (p.rng.uniform() >= q) {
+            p.alive = false;
+            continue;
+          }
+          p.beta /= q;
+        }
+        const vec3 d = cosineSample(p.nrm, p.rng);
+        if (glm::dot(d, p.geo) <= 0) {
+          p.alive = false;
+          continue;
+        }
+        owner.push_back(k);
+        queue.push_back(Ray{spawn(p.pos, p.geo, d), d, 0.0f, kInfinity});
+      }
+      if (queue.empty()) break;
+      const std::vector<Hit> bh = traceQueue(false);
+      for (size_t q = 0; q < queue.size(); ++q) {
+        Path& p = paths[owner[q]];
+        if (!bh[q].valid()) {
+          p.L += p.beta * opts.sky;
+          p.alive = false;
+          continue;
+        }
+        sh.normals(queue[q], bh[q], p.geo, p.nrm);
+        p.pos = queue[q].at(bh[q].t);
+        p.mesh = bh[q].mesh;
+      }
+    }
+    for (size_t k = 0; k < ns; ++k)
+      if (hits[k].valid()) value[k] = paths[k].L;
+  }
+
+  for (size_t px = 0; px < npx; ++px) {
+    vec3 sum(0.0f);
+    RayCounters primary;
+    for (int s = 0; s < spp; ++s) {
+      sum += value[px * spp + s];
+      primary += camera[px * spp + s];
+    }
+    aov.color.pixels[px] = sum / float(spp);
+    const float inv = 1.0f / float(spp);
+    aov.steps[px] = float(primary.steps()) * inv;
+    aov.rangeQueries[px] = float(primary.rangeQueries) * inv;
+    aov.inversions[px] = float(primary.inversions) * inv;
+    aov.cellsMarched[px] = float(primary.cellsMarched) * inv;
+  }
+  res.primaryRays = int64_t(ns);
+  return res;
+}
+
+}  // namespace oblong::vk

@@ -1,0 +1,53 @@
+// The Vulkan ray tracing path (issue 7; DESIGN §4 "Run the canonical configuration on
+// Vulkan ray tracing"): a headless Vulkan 1.2 device with VK_KHR_ray_tracing_pipeline
+// and VK_KHR_acceleration_structure (Mesa's lavapipe on the CPU, or a GPU), one bottom
+// level of AABB geometry per displaced mesh (one AABB per bounding prism: the CPU's
+// Intersector::bounds), one of triangle geometry per undisplaced mesh, a top level over
+// them, and the traversal in an intersection shader. Same rays in, same hits out as
+// EmbreeScene::intersect (docs/vulkan.md has the layouts and the parity numbers).
+#pragma once
+
+#include "core/memory.h"
+#include "core/scene.h"
+#include "render/embree_scene.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace oblong::vk {
+
+struct Device;  // instance, device, pipeline (vulkan_scene.cpp)
+
+class VulkanScene {
+ public:
+  // Throws oblong::Error with one line when no Vulkan device supports ray tracing, when
+  // the configuration is not the canonical one (rmip + newton + midpoint2d, no
+  // baseline), or when the scene does not fit the device's limits.
+  VulkanScene(const Scene& scene, const AccelOptions& opts);
+  ~VulkanScene();
+  VulkanScene(const VulkanScene&) = delete;
+  VulkanScene& operator=(const VulkanScene&) = delete;
+
+  // First hit of every ray (Vulkan needs tmin >= 0: a negative tmin is an error);
+  // per-ray traversal work into *counters when given. Seconds of the dispatches only.
+  // anyHit: occlusion rays, the traversal stops at the first prism or triangle that
+  // reports a hit (valid() then means occluded; t, mesh and uv are of that hit).
+  std::vector<Hit> trace(const std::vector<Ray>& rays, std::vector<RayCounters>* counters = nullptr,
+                         double* seconds = nullptr, bool anyHit = false);
+
+  std::string deviceName() const;   // e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  std::string driverInfo() const;   // e.g. "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"
+  std::string geometryName() const { return geometryName_; }
+  MemoryReport memory() const;
+  double buildSeconds() const { return buildSeconds_; }
+  size_t baseTriangles() const { return baseTriangles_; }
+
+ private:
+  std::unique_ptr<Device> dev_;
+  std::string geometryName_;
+  double buildSeconds_ = 0;
+  size_t baseTriangles_ = 0;
+};
+
+}  // namespace oblong::vk
