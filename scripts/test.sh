@@ -9,6 +9,7 @@ jobs=$(nproc)
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j "$jobs"
 (cd build && ctest --output-on-failure -j "$jobs")
+experiments/run_all --quick --build build  # the RMIP-paper experiments, tiny sizes (issue 6)
 
 if [ "${OBLONG_SKIP_SANITIZERS:-0}" != 1 ]; then
   # Sanitizer build: unit tests only (benchmarks off), statistics on.

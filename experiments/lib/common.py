@@ -1,0 +1,533 @@
+"""Shared machinery of the RMIP-paper experiments (issue 6): runs the `oblong` binary
+(`render` / `trace` with `--stats`), repeats and interleaves the runs, records the
+machine, the build and every resolved configuration, writes CSVs, plots and the
+summary that `experiments/run_all` turns into experiments/REPORT.md.
+
+Run with Debian's interpreter (/usr/bin/python3): its python3-matplotlib and
+python3-numpy are what the plots use; `python3` on PATH may be another interpreter.
+
+Each experiment is `experiments/<name>/run.py`, a module with
+
+    NAME, TITLE, HYPOTHESIS       strings
+    def run(ctx) -> dict           the summary (see Summary below)
+
+and `common.main(module)` gives it the command line
+
+    run.py [--quick] [--build DIR] [--out DIR] [--reps N] [--scratch DIR]
+
+Outputs go to --out (default: the experiment's own folder in a full run; run_all
+passes a scratch folder in quick mode, so the committed full results are never
+overwritten by a quick run).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import datetime
+import hashlib
+import json
+import os
+import platform
+import random
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import traceback
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+EXPERIMENTS = ROOT / "experiments"
+SCENES = ROOT / "scenes"
+
+# The two configurations every experiment is about (docs/traversal.md).
+CANONICAL = []  # the defaults: rmip (full resolution) + newton + midpoint2d, marching 4, inversion on
+TFDM = ["--range", "minmax_mipmap", "--splitter", "quadtree", "--inversion-in-traversal", "false",
+        "--marching-scale", "1"]
+RANGE_PREFIXES = ("rmip/", "minmax_mipmap/", "safety_zones/")
+
+# RMIP resolutions of the paper's Table 1 columns, as divisors of the map's longer side
+# (strategies.range.resolution = max(W, H) / divisor; divisor 1 = full resolution, the
+# canonical default). Chosen so that "normal" has about the minmax mipmap's memory
+# (the paper's "RMIP" column: x1.3-1.6 of TFDM), "low" a tenth of it or less and "high"
+# the full-resolution structure (the paper's x7.6-30).
+RMIP_LEVELS = {"low": 16, "normal": 4, "high": 1}
+
+
+class ExperimentError(RuntimeError):
+    pass
+
+
+# ---------------------------------------------------------------------------------------
+# Scenes
+
+
+def strip_json_comments(text: str) -> str:
+    """Removes // and /* */ comments outside strings (the scene format allows them)."""
+    out, i, n, in_str = [], 0, len(text), False
+    while i < n:
+        c = text[i]
+        if in_str:
+            out.append(c)
+            if c == "\\" and i + 1 < n:
+                out.append(text[i + 1])
+                i += 2
+                continue
+            if c == '"':
+                in_str = False
+            i += 1
+        elif c == '"':
+            in_str = True
+            out.append(c)
+            i += 1
+        elif text.startswith("//", i):
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+        elif text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            i = n if j < 0 else j + 2
+        else:
+            out.append(c)
+            i += 1
+    return "".join(out)
+
+
+def load_scene(path: Path) -> dict:
+    """A scene file as a dict, with relative mesh and map paths made absolute (so that a
+    variant written elsewhere still finds them)."""
+    path = Path(path)
+    doc = json.loads(strip_json_comments(path.read_text()))
+    for m in doc.get("meshes", []):
+        if "file" in m and not os.path.isabs(m["file"]):
+            m["file"] = str((path.parent / m["file"]).resolve())
+        d = m.get("displacement")
+        if d and not os.path.isabs(d["map"]):
+            d["map"] = str((path.parent / d["map"]).resolve())
+    return doc
+
+
+def scene_path(name: str) -> Path:
+    return SCENES / f"{name}.json"
+
+
+def map_size(scene: dict) -> tuple[int, int]:
+    """Width and height of the first displaced mesh's map (PNG header)."""
+    for m in scene["meshes"]:
+        if "displacement" in m:
+            return png_size(Path(m["displacement"]["map"]))
+    raise ExperimentError("scene has no displaced mesh")
+
+
+def png_size(path: Path) -> tuple[int, int]:
+    with open(path, "rb") as f:
+        head = f.read(24)
+    if head[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ExperimentError(f"{path}: not a PNG")
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+def rmip_resolution(scene: dict, level: str) -> int:
+    w, h = map_size(scene)
+    return max(1, max(w, h) // RMIP_LEVELS[level])
+
+
+# ---------------------------------------------------------------------------------------
+# Context and running oblong
+
+
+class Context:
+    def __init__(self, name: str, binary: Path, out: Path, scratch: Path, quick: bool, reps: int | None,
+                 threads: int = 1, log=None):
+        self.name = name
+        self.binary = Path(binary).resolve()
+        self.out = Path(out)
+        self.scratch = Path(scratch)
+        self.quick = quick
+        self.reps_override = reps
+        self.threads = threads
+        self.runs = 0
+        self.scenes: dict[str, dict] = {}  # variant name -> the JSON written (recorded in run.json)
+        self.configs: dict[str, dict] = {}  # label -> flags and the resolved config from the stats
+        self.start = time.time()
+        self.load_start = os.getloadavg()
+        self._log = log or (lambda s: print(f"[{name}] {s}", flush=True))
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.scratch.mkdir(parents=True, exist_ok=True)
+
+    def log(self, s: str) -> None:
+        self._log(s)
+
+    def reps(self, full: int, quick: int = 1) -> int:
+        if self.reps_override:
+            return self.reps_override
+        return quick if self.quick else full
+
+    def pick(self, full, quick):
+        return quick if self.quick else full
+
+    def tmp(self, *parts) -> Path:
+        p = self.scratch.joinpath(*parts)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        return p
+
+    def write_scene(self, name: str, doc: dict) -> Path:
+        """Writes a scene variant into the scratch folder and records it."""
+        p = self.tmp("scenes", f"{name}.json")
+        p.write_text(json.dumps(doc, indent=1))
+        self.scenes[name] = doc
+        return p
+
+    def scene_variant(self, base: str, name: str, strategies: dict | None = None, displacement: dict | None = None,
+                      image: dict | None = None) -> Path:
+        doc = load_scene(scene_path(base))
+        if strategies is not None:
+            doc["strategies"] = strategies
+        if displacement:
+            for m in doc["meshes"]:
+                if "displacement" in m:
+                    m["displacement"].update(displacement)
+        if image:
+            doc["image"] = image
+        return self.write_scene(name, doc)
+
+    def record_config(self, label: str, run: "Run") -> None:
+        c = self.configs.setdefault(label, {"command": run.cmd_str(), "scene": run.scene,
+                                            "resolved": run.stats.get("config"),
+                                            "geometry": run.stats.get("geometry")})
+        c.setdefault("memory", run.stats.get("memory"))
+
+
+class Run:
+    def __init__(self, cmd, scene, stats, wall, cpu, stdout):
+        self.cmd, self.scene, self.stats, self.wall, self.cpu, self.stdout = cmd, scene, stats, wall, cpu, stdout
+
+    def cmd_str(self) -> str:
+        return " ".join(str(Path(c).relative_to(ROOT)) if str(c).startswith(str(ROOT) + "/") else str(c)
+                        for c in self.cmd)
+
+    @property
+    def seconds(self) -> float:
+        s = self.stats["seconds"]
+        return s["render"] if "render" in s else s["trace"]
+
+    @property
+    def build_seconds(self) -> float:
+        return self.stats["seconds"]["build"]
+
+
+def run_oblong(ctx: Context, sub: str, scene, args: list, label: str | None = None, timeout: float = 600,
+               threads: int | None = None) -> Run:
+    """Runs `oblong SUB SCENE ARGS --threads 1 --stats TMP.json`; returns the parsed stats,
+    the process's wall time and CPU time (user + system, from wait4)."""
+    fd, stats_path = tempfile.mkstemp(suffix=".json", dir=ctx.scratch)
+    os.close(fd)
+    th = ctx.threads if threads is None else threads
+    cmd = [str(ctx.binary), sub, str(scene)] + [str(a) for a in args] + ["--threads", str(th), "--stats", stats_path]
+    if sub == "render":
+        cmd.append("-q")
+        if "-o" not in cmd:
+            cmd += ["-o", str(ctx.tmp("render.png"))]
+    t0 = time.time()
+    with tempfile.TemporaryFile(dir=ctx.scratch) as fout, tempfile.TemporaryFile(dir=ctx.scratch) as ferr:
+        p = subprocess.Popen(cmd, stdout=fout, stderr=ferr, cwd=ROOT)
+        timer = threading.Timer(timeout, p.kill)
+        timer.start()
+        try:
+            # wait4: the CPU time (user + system) of this child alone.
+            _, status, ru = os.wait4(p.pid, 0)
+        finally:
+            timer.cancel()
+        p.returncode = os.waitstatus_to_exitcode(status)
+        wall = time.time() - t0
+        cpu = ru.ru_utime + ru.ru_stime
+        fout.seek(0)
+        ferr.seek(0)
+        out, err = fout.read(), ferr.read()
+    if p.returncode != 0:
+        if os.path.exists(stats_path):
+            os.unlink(stats_path)
+        raise ExperimentError(f"exit status {p.returncode}: {' '.join(cmd)}\n{err.decode(errors='replace')[-2000:]}")
+    try:
+        stats = json.load(open(stats_path))
+    finally:
+        os.unlink(stats_path)
+    ctx.runs += 1
+    r = Run(cmd, str(scene), stats, wall, cpu, out.decode(errors="replace"))
+    if label:
+        ctx.record_config(label, r)
+    return r
+
+
+def interleaved(ctx: Context, jobs: list, reps: int, seed: int = 1) -> dict:
+    """jobs: (key, sub, scene, args) tuples. Runs `reps` rounds; each round runs every job
+    once, in a fresh random order (seeded), so that slow drifts of the machine's load hit
+    all configurations alike. Returns {key: [Run per round]} (rounds in order)."""
+    out = {j[0]: [] for j in jobs}
+    rng = random.Random(seed)
+    for rep in range(reps):
+        order = list(jobs)
+        rng.shuffle(order)
+        for key, sub, scene, args in order:
+            out[key].append(run_oblong(ctx, sub, scene, args, label=key))
+        ctx.log(f"round {rep + 1}/{reps} done ({len(jobs)} runs, load {os.getloadavg()[0]:.1f})")
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# Numbers
+
+
+def med(xs):
+    xs = [x for x in xs if x == x]
+    return statistics.median(xs) if xs else float("nan")
+
+
+def spread(xs):
+    xs = [x for x in xs if x == x]
+    return (min(xs), max(xs)) if xs else (float("nan"), float("nan"))
+
+
+def paired_ratios(base: list, other: list) -> list:
+    """base[i] / other[i] per round: > 1 means `other` is faster (a speed-up)."""
+    return [b.seconds / o.seconds for b, o in zip(base, other) if o.seconds > 0]
+
+
+def range_bytes(stats: dict) -> int:
+    """Bytes of the range-query structure (the paper's "data structure" for TFDM and RMIP);
+    for the pre-tessellated baseline, everything it built (BVH and micro-mesh)."""
+    mem = stats.get("memory", {})
+    if stats.get("config", {}).get("baseline") == "tessellated":
+        return int(stats.get("memory_total", 0))
+    return int(sum(v for k, v in mem.items() if k.startswith(RANGE_PREFIXES)))
+
+
+def total_bytes(stats: dict) -> int:
+    return int(stats.get("memory_total", 0))
+
+
+def fmt_ratio(x: float, lo: float | None = None, hi: float | None = None, digits: int = 2) -> str:
+    if x != x:
+        return "–"
+    s = f"×{x:.{digits}f}"
+    if lo is not None and hi is not None and lo == lo:
+        s += f" ({lo:.{digits}f}–{hi:.{digits}f})"
+    return s
+
+
+def fmt_bytes(b: float) -> str:
+    if b >= 1 << 30:
+        return f"{b / (1 << 30):.2f} GiB"
+    if b >= 1 << 20:
+        return f"{b / (1 << 20):.2f} MiB"
+    if b >= 1 << 10:
+        return f"{b / (1 << 10):.1f} KiB"
+    return f"{int(b)} B"
+
+
+def fmt_g(x: float, digits: int = 3) -> str:
+    if x != x:
+        return "–"
+    return f"{x:.{digits}g}"
+
+
+def md_table(header: list, rows: list) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    for r in rows:
+        lines.append("| " + " | ".join(str(c) for c in r) + " |")
+    return "\n".join(lines)
+
+
+def write_csv(path: Path, rows: list, fields: list | None = None) -> None:
+    if not rows:
+        raise ExperimentError(f"no rows for {path}")
+    fields = fields or list(rows[0].keys())
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items() if k in fields})
+
+
+def plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as pyplot
+
+    pyplot.rcParams.update({"font.size": 8, "axes.titlesize": 9, "figure.dpi": 100})
+    return pyplot
+
+
+# ---------------------------------------------------------------------------------------
+# Machine, build and run record
+
+
+def _cmake_cache(build_dir: Path) -> dict:
+    keys = ("CMAKE_BUILD_TYPE", "OBLONG_STATS", "OBLONG_SANITIZE", "CMAKE_CXX_COMPILER", "CMAKE_CXX_FLAGS",
+            "CMAKE_CXX_FLAGS_RELEASE")
+    out = {}
+    p = build_dir / "CMakeCache.txt"
+    if p.exists():
+        for line in p.read_text(errors="replace").splitlines():
+            m = re.match(r"^([A-Za-z_]+):[A-Z]+=(.*)$", line)
+            if m and m.group(1) in keys:
+                out[m.group(1)] = m.group(2)
+    return out
+
+
+def _first_line(cmd: list) -> str:
+    try:
+        return subprocess.run(cmd, capture_output=True, text=True, timeout=20).stdout.strip().splitlines()[0]
+    except Exception:  # noqa: BLE001 - informational only
+        return "?"
+
+
+def machine_info() -> dict:
+    cpu = "?"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    mem = "?"
+    try:
+        for line in open("/proc/meminfo"):
+            if line.startswith("MemTotal"):
+                mem = f"{int(line.split()[1]) / (1 << 20):.1f} GiB"
+    except OSError:
+        pass
+    import matplotlib
+    import numpy
+
+    return {
+        "host": platform.node(),
+        "os": platform.platform(),
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "memory": mem,
+        "python": sys.version.split()[0] + " (" + sys.executable + ")",
+        "numpy": numpy.__version__,
+        "matplotlib": matplotlib.__version__,
+        "note": "2-core VM shared with other engineers' builds and tests: wall-clock timings are noisy; "
+                "every timing is --threads 1, repeated in interleaved rounds, reported as median and range",
+    }
+
+
+def build_info(binary: Path) -> dict:
+    b = Path(binary).resolve()
+    h = hashlib.sha256(b.read_bytes()).hexdigest()[:16]
+    cache = _cmake_cache(b.parent)
+    git = {}
+    try:
+        git["commit"] = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True,
+                                       timeout=20).stdout.strip()
+        st = subprocess.run(["git", "--no-optional-locks", "-C", str(ROOT), "status", "--porcelain",
+                             "--untracked-files=no"], capture_output=True, text=True, timeout=20).stdout
+        git["modified_tracked_files"] = len([x for x in st.splitlines() if x.strip()])
+    except Exception:  # noqa: BLE001
+        pass
+    return {
+        "binary": str(b.relative_to(ROOT)) if str(b).startswith(str(ROOT)) else str(b),
+        "binary_sha256_16": h,
+        "binary_mtime": datetime.datetime.fromtimestamp(b.stat().st_mtime, datetime.timezone.utc).isoformat(
+            timespec="seconds"),
+        "cmake": cache,
+        "compiler": _first_line([cache.get("CMAKE_CXX_COMPILER", "c++"), "--version"]),
+        "git": git,
+    }
+
+
+def stats_enabled(binary: Path) -> bool:
+    return _cmake_cache(Path(binary).resolve().parent).get("OBLONG_STATS", "ON").upper() in ("ON", "1", "TRUE")
+
+
+# ---------------------------------------------------------------------------------------
+# Entry point shared by every experiment
+
+
+def default_build() -> Path:
+    return ROOT / "build-exp"
+
+
+def main(module) -> int:
+    ap = argparse.ArgumentParser(description=f"{module.NAME}: {module.TITLE}")
+    ap.add_argument("--quick", action="store_true", help="tiny sizes and ray counts (CI)")
+    ap.add_argument("--build", default=str(default_build()), help="build folder holding `oblong`")
+    ap.add_argument("--out", default=None, help="output folder (default: experiments/NAME in a full run)")
+    ap.add_argument("--scratch", default=None, help="folder for temporary files (default: a temporary folder)")
+    ap.add_argument("--reps", type=int, default=None, help="override the number of interleaved rounds")
+    a = ap.parse_args()
+    binary = Path(a.build) / "oblong"
+    if not binary.exists():
+        print(f"{module.NAME}: {binary} not found (build it, or run experiments/run_all)", file=sys.stderr)
+        return 2
+    if a.out is None:
+        if a.quick:
+            print(f"{module.NAME}: --quick needs --out (quick results never overwrite the committed ones)",
+                  file=sys.stderr)
+            return 2
+        out = EXPERIMENTS / module.NAME
+    else:
+        out = Path(a.out)
+    scratch = Path(a.scratch) if a.scratch else Path(tempfile.mkdtemp(prefix=f"oblong-{module.NAME}-"))
+    keep = a.scratch is not None
+    ctx = Context(module.NAME, binary, out, scratch, a.quick, a.reps)
+    started = datetime.datetime.now(datetime.timezone.utc)
+    status, summary = "ok", None
+    try:
+        summary = module.run(ctx)
+        status = summary.get("status", "ok")
+    except Exception as e:  # noqa: BLE001 - reported in the summary and the exit status
+        traceback.print_exc()
+        status = "failed"
+        summary = {"status": "failed", "verdict": f"the experiment failed: {type(e).__name__}: {str(e)[:500]}",
+                   "tables": [], "plots": []}
+    finally:
+        if not keep:
+            shutil.rmtree(scratch, ignore_errors=True)
+    elapsed = time.time() - ctx.start
+    summary.update({
+        "name": module.NAME,
+        "title": module.TITLE,
+        "hypothesis": module.HYPOTHESIS,
+        "mode": "quick" if a.quick else "full",
+        "status": status,
+        "seconds": round(elapsed, 1),
+        "runs": ctx.runs,
+    })
+    record = {
+        "experiment": module.NAME,
+        "mode": summary["mode"],
+        "command": " ".join(["/usr/bin/python3", f"experiments/{module.NAME}/run.py"] + sys.argv[1:]),
+        "started_utc": started.isoformat(timespec="seconds"),
+        "seconds": round(elapsed, 1),
+        "oblong_runs": ctx.runs,
+        "status": status,
+        "load_average_start": [round(x, 2) for x in ctx.load_start],
+        "load_average_end": [round(x, 2) for x in os.getloadavg()],
+        "machine": machine_info(),
+        "build": build_info(binary),
+        "statistics_compiled_in": stats_enabled(binary),
+        "threads": ctx.threads,
+        "rmip_levels": {k: f"resolution = max(map W, H) / {v}" for k, v in RMIP_LEVELS.items()},
+        "configurations": ctx.configs,
+        "scene_variants": ctx.scenes,
+    }
+    summary["machine"] = record["machine"]
+    summary["build"] = record["build"]
+    summary["load_average"] = [record["load_average_start"], record["load_average_end"]]
+    summary["started_utc"] = record["started_utc"]
+    # Paths inside the repository are written relative to its root.
+    def dump(x):
+        return json.dumps(x, indent=1, default=str, ensure_ascii=False).replace(str(ROOT) + "/", "") + "\n"
+
+    (out / "run.json").write_text(dump(record))
+    (out / "summary.json").write_text(dump(summary))
+    print(f"[{module.NAME}] {status}: {summary.get('verdict', '')} ({elapsed:.0f} s, {ctx.runs} runs)", flush=True)
+    return {"ok": 0, "mismatch": 3}.get(status, 1)
