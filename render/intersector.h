@@ -11,6 +11,7 @@
 #include "core/params.h"
 #include "core/triangle.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 
@@ -36,6 +37,19 @@ struct RayCounters {
     return *this;
   }
 };
+
+// The counters as `--stats` JSON writes them (CPU and Vulkan alike), with the mean steps
+// over `rays`.
+inline nlohmann::json countersJson(const RayCounters& c, int64_t rays) {
+  return {{"boxes", c.boxes},
+          {"range_queries", c.rangeQueries},
+          {"inversions", c.inversions},
+          {"cells_marched", c.cellsMarched},
+          {"micro_triangles", c.microTriangles},
+          {"prisms", c.prisms},
+          {"steps", c.steps()},
+          {"steps_per_ray", double(c.steps()) / double(std::max<int64_t>(1, rays))}};
+}
 
 struct TriangleHit {
   float t = kInfinity;

@@ -121,18 +121,6 @@ nlohmann::json configJson(const AccelOptions& o) {
   return j;
 }
 
-nlohmann::json countersJson(const RayCounters& c, int64_t rays) {
-  const double n = double(std::max<int64_t>(1, rays));
-  return {{"boxes", c.boxes},
-          {"range_queries", c.rangeQueries},
-          {"inversions", c.inversions},
-          {"cells_marched", c.cellsMarched},
-          {"micro_triangles", c.microTriangles},
-          {"prisms", c.prisms},
-          {"steps", c.steps()},
-          {"steps_per_ray", double(c.steps()) / n}};
-}
-
 void writeJson(const std::string& path, const nlohmann::json& j) {
   std::ofstream f(path);
   if (!f) fail(path, "cannot write statistics");

@@ -16,17 +16,6 @@ namespace oblong::vk {
 
 namespace {
 
-nlohmann::json countersJson(const RayCounters& c, int64_t rays) {
-  return {{"boxes", c.boxes},
-          {"range_queries", c.rangeQueries},
-          {"inversions", c.inversions},
-          {"cells_marched", c.cellsMarched},
-          {"micro_triangles", c.microTriangles},
-          {"prisms", c.prisms},
-          {"steps", c.steps()},
-          {"steps_per_ray", double(c.steps()) / double(std::max<int64_t>(1, rays))}};
-}
-
 nlohmann::json deviceJson(const VulkanScene& vs) {
   nlohmann::json j = {{"api", "vulkan"}, {"name", vs.deviceName()}, {"driver", vs.driverInfo()}};
   for (const auto& m : vs.memory()) j["memory"][m.name] = m.bytes;
