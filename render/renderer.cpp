@@ -69,26 +69,10 @@ struct Tracer {
   // Smooth normals: every mesh's triangles, prepared once (indexed by Hit::prim).
   std::vector<std::vector<DisplacedTriangle>> triangles;
 
-  // The geometric normal facing the ray (ngf) and the shading normal (ns, same side).
   void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
-    ngf = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
-    ns = ngf;
-    if (opts.normals != ShadingNormals::Smooth) return;
-    const SceneMesh& sm = scene.meshes[size_t(h.mesh)];
-    const DisplacedTriangle& T = triangles[size_t(h.mesh)][size_t(h.prim)];
-    // Displaced hits carry T's uv (exact barycentrics); plain ones only the point.
-    vec2 b = sm.displacement ? T.baryOfUV(h.uv) : baryOfPoint(T, r.at(h.t));
-    b = glm::clamp(b, vec2(0.0f), vec2(1.0f));  // rounding can leave T by an ulp
-    if (b.x + b.y > 1.0f) b /= b.x + b.y;
-    const vec3 n = smoothDisplacedNormal(T, sm.displacement ? &*sm.displacement : nullptr, b.x, b.y);
-    if (n == vec3(0.0f)) return;
-    ns = glm::dot(n, ngf) < 0 ? -n : n;
+    shadingNormals(scene, triangles, opts.normals, r, h, ngf, ns);
   }
-
-  // Offset origin of a ray leaving p in direction d (the side of ngf it leaves by).
-  static vec3 spawn(const vec3& p, const vec3& ngf, const vec3& d) {
-    return p + (glm::dot(ngf, d) < 0 ? -spawnEps(p) : spawnEps(p)) * ngf;
-  }
+  static vec3 spawn(const vec3& p, const vec3& ngf, const vec3& d) { return spawnOrigin(p, ngf, d); }
 
   // Direct light from every light at p (geometric normal ng and shading normal n facing
   // the incoming ray).
@@ -206,6 +190,22 @@ vec3 smoothDisplacedNormal(const DisplacedTriangle& T, const Displacement* d, fl
   }
   const float len = glm::length(n);
   return len > 0 && std::isfinite(len) ? n / len : vec3(0.0f);
+}
+
+void shadingNormals(const Scene& scene, const std::vector<std::vector<DisplacedTriangle>>& triangles,
+                    ShadingNormals kind, const Ray& r, const Hit& h, vec3& ngf, vec3& ns) {
+  ngf = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
+  ns = ngf;
+  if (kind != ShadingNormals::Smooth) return;
+  const SceneMesh& sm = scene.meshes[size_t(h.mesh)];
+  const DisplacedTriangle& T = triangles[size_t(h.mesh)][size_t(h.prim)];
+  // Displaced hits carry T's uv (exact barycentrics); plain ones only the point.
+  vec2 b = sm.displacement ? T.baryOfUV(h.uv) : baryOfPoint(T, r.at(h.t));
+  b = glm::clamp(b, vec2(0.0f), vec2(1.0f));  // rounding can leave T by an ulp
+  if (b.x + b.y > 1.0f) b /= b.x + b.y;
+  const vec3 n = smoothDisplacedNormal(T, sm.displacement ? &*sm.displacement : nullptr, b.x, b.y);
+  if (n == vec3(0.0f)) return;
+  ns = glm::dot(n, ngf) < 0 ? -n : n;
 }
 
 const char* integratorName(Integrator i) {

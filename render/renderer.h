@@ -41,6 +41,12 @@ const char* shadingNormalsName(ShadingNormals n);
 // Phong's interpolated normal. Unit length, oriented like P_u × P_v; zero when it cannot
 // be formed (degenerate T).
 vec3 smoothDisplacedNormal(const DisplacedTriangle& T, const Displacement* d, float u, float v);
+
+// The geometric normal of hit h facing ray r (ngf) and the shading normal (ns, same
+// side) of the chosen kind; `triangles` (every mesh's, indexed by Hit::prim) is needed
+// for smooth normals only. Shared by the CPU and Vulkan renderers.
+void shadingNormals(const Scene& scene, const std::vector<std::vector<DisplacedTriangle>>& triangles,
+                    ShadingNormals kind, const Ray& r, const Hit& h, vec3& ngf, vec3& ns);
 // ∇_uv h of the bilinear height h(uv) (DESIGN §1), inside the cell that holds uv.
 vec2 bilinearHeightGradient(const Displacement& d, const vec2& uv);
 

@@ -53,6 +53,11 @@ inline float spawnEps(const vec3& p) {
   return 1e-4f * std::max(1.0f, std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}));
 }
 
+// Origin of a ray leaving p in direction d, offset to the side of ngf it leaves by.
+inline vec3 spawnOrigin(const vec3& p, const vec3& ngf, const vec3& d) {
+  return p + (glm::dot(ngf, d) < 0 ? -spawnEps(p) : spawnEps(p)) * ngf;
+}
+
 // Barycentrics (u, v) of the point of T's plane nearest to p (Ericson 2004, §3.4).
 inline vec2 baryOfPoint(const DisplacedTriangle& T, const vec3& p) {
   const vec3 e1 = T.p[1] - T.p[0], e2 = T.p[2] - T.p[0], w = p - T.p[0];

@@ -11,28 +11,13 @@ namespace oblong::vk {
 
 namespace {
 
-vec3 spawn(const vec3& p, const vec3& ngf, const vec3& d) {
-  return p + (glm::dot(ngf, d) < 0 ? -spawnEps(p) : spawnEps(p)) * ngf;
-}
-
 struct Shader {
   const Scene& scene;
   const RenderOptions& opts;
   std::vector<std::vector<DisplacedTriangle>> triangles;  // smooth normals only
 
-  // Tracer::normals of render/renderer.cpp.
   void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
-    ngf = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
-    ns = ngf;
-    if (opts.normals != ShadingNormals::Smooth) return;
-    const SceneMesh& sm = scene.meshes[size_t(h.mesh)];
-    const DisplacedTriangle& T = triangles[size_t(h.mesh)][size_t(h.prim)];
-    vec2 b = sm.displacement ? T.baryOfUV(h.uv) : baryOfPoint(T, r.at(h.t));
-    b = glm::clamp(b, vec2(0.0f), vec2(1.0f));
-    if (b.x + b.y > 1.0f) b /= b.x + b.y;
-    const vec3 n = smoothDisplacedNormal(T, sm.displacement ? &*sm.displacement : nullptr, b.x, b.y);
-    if (n == vec3(0.0f)) return;
-    ns = glm::dot(n, ngf) < 0 ? -n : n;
+    shadingNormals(scene, triangles, opts.normals, r, h, ngf, ns);
   }
 };
 
@@ -114,7 +99,7 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
       const vec3 d = cosineSample(n, p.rng);
       if (glm::dot(d, ng) <= 0) continue;  // below the geometric surface: occluded
       owner.push_back(k);
-      queue.push_back(Ray{spawn(pt, ng, d), d, 0.0f, aoRadius});
+      queue.push_back(Ray{spawnOrigin(pt, ng, d), d, 0.0f, aoRadius});
     } else {
       p.pos = r.at(h.t), p.nrm = n, p.geo = ng, p.mesh = h.mesh, p.alive = true;
     }
@@ -195,7 +180,7 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
           continue;
         }
         owner.push_back(k);
-        queue.push_back(Ray{spawn(p.pos, p.geo, d), d, 0.0f, kInfinity});
+        queue.push_back(Ray{spawnOrigin(p.pos, p.geo, d), d, 0.0f, kInfinity});
       }
       if (queue.empty()) break;
       const std::vector<Hit> bh = traceQueue(false);
