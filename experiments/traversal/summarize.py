@@ -29,7 +29,7 @@ def main(path):
         }
     ctx = data["context"]
     print(f"machine: {ctx.get('host_name', '?')}, {ctx.get('num_cpus', '?')} CPUs @ {ctx.get('mhz_per_cpu', '?')} MHz, "
-          f"date {ctx.get('date', '?')}, build {ctx.get('library_build_type', '?')}")
+          f"date {ctx.get('date', '?')}")  # (the library_build_type field is Google Benchmark's own build, not oblong's)
     print()
     print("| configuration | Mrays/s (median, min-max) | steps/ray | memory MB | speed vs TFDM | steps vs TFDM | memory vs tessellated |")
     print("|---|---|---|---|---|---|---|")
