@@ -217,6 +217,17 @@ const char* integratorName(Integrator i) {
   return "?";
 }
 
+void AOVs::allocate(ivec2 size) {
+  const size_t npx = size_t(size.x) * size_t(size.y);
+  color = Image(size.x, size.y);
+  depth.assign(npx, kInfinity);
+  normal.assign(npx, vec3(0.0f));
+  steps.assign(npx, 0.0f);
+  rangeQueries.assign(npx, 0.0f);
+  inversions.assign(npx, 0.0f);
+  cellsMarched.assign(npx, 0.0f);
+}
+
 RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts) {
   if (opts.size.x <= 0 || opts.size.y <= 0) fail("render", "image size must be positive");
   if (opts.spp <= 0) fail("--spp", "must be >= 1, got {}", opts.spp);
@@ -224,13 +235,7 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
   const int W = opts.size.x, H = opts.size.y;
   const size_t npx = size_t(W) * H;
   AOVs& aov = res.aov;
-  aov.color = Image(W, H);
-  aov.depth.assign(npx, kInfinity);
-  aov.normal.assign(npx, vec3(0.0f));
-  aov.steps.assign(npx, 0.0f);
-  aov.rangeQueries.assign(npx, 0.0f);
-  aov.inversions.assign(npx, 0.0f);
-  aov.cellsMarched.assign(npx, 0.0f);
+  aov.allocate(opts.size);
 
   const PinholeCamera cam(scene.camera, opts.size);
   Tracer tracer{scene, accel, opts, opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene), {}};

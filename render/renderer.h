@@ -70,6 +70,8 @@ struct AOVs {
   std::vector<float> depth;   // t of the first hit (inf: miss), first sample
   std::vector<vec3> normal;   // shading normal of the first hit, first sample (0: miss)
   std::vector<float> steps, rangeQueries, inversions, cellsMarched;
+  // Every buffer sized for the image and cleared (depth to inf).
+  void allocate(ivec2 size);
 };
 
 struct RenderResult {

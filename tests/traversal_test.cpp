@@ -727,36 +727,3 @@ TEST_CASE("float traversal loses no hit of a double-precision run", "[traversal]
     CHECK(lost == 0);
   }
 }
-
-// The traversal (not only the pre-tessellation) is watertight: rays from inside a
-// closed displaced torus all hit, through Embree, for the canonical and TFDM setups.
-TEST_CASE("a closed displaced torus leaks no ray through the traversal", "[traversal][watertight]") {
-  Scene s;
-  SceneMesh torusMesh_;
-  torusMesh_.mesh = torusMesh(1.0f, 0.4f, 24, 12);
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(61, 47, 9));
-  torusMesh_.displacement = Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)};
-  s.meshes.push_back(std::move(torusMesh_));
-  AccelOptions canonical, tfdm;
-  tfdm.traversal = config("minmax_mipmap", "newton", "quadtree");
-  tfdm.traversal.inversionInTraversal = false;
-  tfdm.traversal.marchingScale = 1.0f;
-  for (const AccelOptions& opts : {canonical, tfdm}) {
-    EmbreeScene accel(s, opts);
-    INFO(accel.geometryName());
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> U(0.0f, 1.0f);
-    int leaks = 0;
-    const int n = 20000;
-    for (int k = 0; k < n; ++k) {
-      // Origins on the tube's centre circle; the shell stays within 0.075 of radius 0.4.
-      const float a = 2.0f * std::numbers::pi_v<float> * U(rng);
-      const float z = 2 * U(rng) - 1, phi = 2.0f * std::numbers::pi_v<float> * U(rng);
-      const float rr = std::sqrt(std::max(0.0f, 1 - z * z));
-      Ray r{vec3(std::cos(a), 0.0f, std::sin(a)), vec3(rr * std::cos(phi), rr * std::sin(phi), z), 0.0f, kInfinity};
-      if (!accel.intersect(r).valid()) ++leaks;
-    }
-    INFO(leaks << " of " << n << " rays leaked");
-    CHECK(leaks == 0);
-  }
-}

@@ -38,13 +38,7 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
   const size_t npx = size_t(W) * H, ns = npx * size_t(spp);
   RenderResult res;
   AOVs& aov = res.aov;
-  aov.color = Image(W, H);
-  aov.depth.assign(npx, kInfinity);
-  aov.normal.assign(npx, vec3(0.0f));
-  aov.steps.assign(npx, 0.0f);
-  aov.rangeQueries.assign(npx, 0.0f);
-  aov.inversions.assign(npx, 0.0f);
-  aov.cellsMarched.assign(npx, 0.0f);
+  aov.allocate(opts.size);
   Shader sh{scene, opts, {}};
   if (opts.normals == ShadingNormals::Smooth)
     for (const SceneMesh& sm : scene.meshes) {
