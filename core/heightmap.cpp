@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 
 namespace oblong {
@@ -75,6 +76,55 @@ class StderrCapture {
   std::FILE* tmp_ = nullptr;
   int saved_ = -1;
 };
+// A corrupt header can claim far more pixels than the file holds; the pixels are
+// allocated before they are read (by us and by the reader), so the claim is checked
+// against the file size first. The bound is the least raw data the claimed pixels are
+// (one sample per pixel at the file's bits per sample, rows padded to bytes; every format
+// stores at least that) over the best compression the format's codec can reach. Formats
+// and codecs without a known best case (JPEG's arithmetic coding, run lengths that scale
+// like HDR's old RLE or BMP's end-of-bitmap, zstd, ...) get only the kMaxTexels limit.
+void checkPixelsFit(const std::string& path, OIIO::ImageInput& in, const OIIO::ImageSpec& spec) {
+  const std::string format = in.format_name();
+  const std::string compression = spec.get_string_attribute("compression");
+  double ratio = 0.0;
+  const char* why = "";
+  if (format == "png") {
+    ratio = 1032.0, why = "deflate codes a match of at most 258 bytes in at least 2 bits: 1032:1 at most";
+  } else if (format == "pnm") {
+    ratio = 1.0, why = "uncompressed";
+  } else if (format == "targa") {
+    ratio = 128.0, why = "a run of at most 128 pixels takes at least 2 bytes";
+  } else if (format == "tiff" || format == "openexr") {
+    if (compression == "none") ratio = 1.0, why = "uncompressed";
+    else if (compression == "zip" || compression == "zips" || compression == "deflate")
+      ratio = 1032.0, why = "deflate codes a match of at most 258 bytes in at least 2 bits: 1032:1 at most";
+    else if (compression == "packbits" || compression == "rle")
+      ratio = 64.0, why = "a run of at most 128 bytes takes 2 bytes";
+    else if (format == "tiff" && compression == "lzw")
+      ratio = 4096.0, why = "an LZW code of at least 9 bits stands for fewer than 4096 bytes";
+  }
+  if (ratio == 0.0) return;
+  std::error_code ec;
+  const double size = double(std::filesystem::file_size(path, ec));
+  if (ec) return;
+  // Bits per sample as the file stores them: OIIO expands PNG palettes and 1-bit PNM.
+  int bits = spec.get_int_attribute("oiio:BitsPerSample", 0);
+  if (bits <= 0) {
+    bits = int(spec.format.size()) * 8;
+    for (const OIIO::TypeDesc& t : spec.channelformats) bits = std::min(bits, int(t.size()) * 8);
+  }
+  std::ifstream f(path, std::ios::binary);
+  char head[26] = {};
+  f.read(head, sizeof head);
+  if (format == "png" && f.gcount() == 26) bits = std::max(1, int((unsigned char)head[24]));  // IHDR bit depth
+  if (format == "pnm" && (head[1] == '1' || head[1] == '4')) bits = 1;                          // PBM
+  const double raw = std::ceil(double(spec.width) * bits / 8.0) * double(spec.height);
+  if (raw > ratio * size)
+    fail(path,
+         "header claims {}x{} pixels (at least {:.0f} bytes at {} bits per sample), more than this {:.0f}-byte {}{}{} "
+         "file can hold ({})",
+         spec.width, spec.height, raw, bits, size, format, compression.empty() ? "" : " ", compression, why);
+}
 }  // namespace
 
 HeightMap HeightMap::load(const std::string& path, bool flipV) {
@@ -84,7 +134,11 @@ HeightMap HeightMap::load(const std::string& path, bool flipV) {
   if (!fs::exists(path, ec)) fail(path, "file not found");
   if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
   StderrCapture capture;
-  auto in = OIIO::ImageInput::open(path);
+  // Unassociated: OpenImageIO would otherwise multiply the first channel of a grey+alpha
+  // PNG (or TIFF) by its alpha, and the heights with it.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) {
     std::string err = oneLine(OIIO::geterror());
     if (err.empty()) err = oneLine(capture.release());
@@ -100,6 +154,7 @@ HeightMap HeightMap::load(const std::string& path, bool flipV) {
   if (spec.width > kMaxSide || spec.height > kMaxSide || int64_t(spec.width) * spec.height > kMaxTexels)
     fail(path, "image is {}x{}: larger than the supported {}x{} or {} texels", spec.width, spec.height, kMaxSide,
          kMaxSide, kMaxTexels);
+  checkPixelsFit(path, *in, spec);
   std::vector<float> texels(size_t(spec.width) * size_t(spec.height));
   if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, texels.data())) {
     std::string err = oneLine(in->geterror());

@@ -18,6 +18,9 @@ using glm::vec3;
 using glm::vec4;
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
+// Largest scene coordinate (positions, displaced points, ray origins): the traversal
+// multiplies up to three coordinates in float, and 2^120 stays below float's 2^128.
+constexpr float kMaxCoordinate = 1099511627776.0f;  // 2^40
 
 struct Ray {
   vec3 o{0.0f};

@@ -6,6 +6,7 @@
 
 #include <glm/mat4x4.hpp>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,10 @@ struct Mesh {
   std::vector<vec2> uvs;      // empty when the file has none
   std::vector<glm::uvec3> triangles;
   size_t skippedTriangles = 0;  // degenerate triangles dropped by finishMesh (warned about)
+  // Per triangle: its index before finishMesh dropped the degenerate ones (the numbering
+  // of the warning line, after assimp's triangulation; not the file's face index, which
+  // assimp's post-processing does not keep). Filled by finishMesh; empty otherwise.
+  std::vector<uint32_t> inputTriangle;
 
   bool hasUVs() const { return !uvs.empty(); }
   DisplacedTriangle triangle(size_t i) const;
@@ -28,11 +33,17 @@ struct MeshLoadOptions {
   glm::mat4 transform{1.0f};  // applied to positions (normals by the inverse transpose)
   bool needUVs = false;       // displaced meshes: a mesh without uvs is an error
   bool warn = true;           // print a warning line on stderr for skipped triangles
+  // Replace the file's normals by area-weighted smooth ones shared per position: split
+  // vertices of per-face (flat) normals would displace apart and crack at hard edges.
+  bool smoothNormals = false;
 };
 
 // Loads every mesh of the file as one Mesh (node transforms applied). Vertex normals
 // are normalised; when the file has none, area-weighted smooth normals are computed,
-// accumulated per position so that uv seams do not split the normal. Errors name the file.
+// accumulated per position so that uv seams do not split the normal. Texture
+// coordinates are as the file stores them (assimp's v flip for glTF and others is
+// undone). A PLY file is checked against its header before assimp reads it. Errors name
+// the file.
 Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts = {});
 
 // The checks every mesh goes through (loaded or generated), in this order: triangles
@@ -41,7 +52,8 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts = {});
 // degenerate triangles are dropped with one warning line on stderr ("oblong: warning:
 // NAME: skipped K of N degenerate triangles (...)"). Errors (naming m.name): every
 // triangle degenerate, a triangle whose area overflows a float, a vertex or (when
-// needUVs) a triangle interior where the normals cancel.
+// needUVs) a triangle interior where the normals cancel, a used vertex beyond
+// kMaxCoordinate after the transform.
 void finishMesh(Mesh& m, const MeshLoadOptions& opts);
 
 // Area-weighted smooth normals accumulated per distinct position.

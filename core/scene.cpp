@@ -165,6 +165,12 @@ Camera parseCamera(const Reader& r) {
   c.to = r.vector3("to", c.to);
   c.up = r.vector3("up", c.up);
   c.fovY = r.number("fov", c.fovY);
+  for (const char* k : {"from", "to"}) {
+    const vec3& p = k[0] == 'f' ? c.from : c.to;
+    if (!(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= kMaxCoordinate))
+      r.errorAt(k, "[{}, {}, {}] lies beyond the supported coordinate range (|x|, |y|, |z| <= 2^40 = {:.4g})", p.x, p.y,
+                p.z, kMaxCoordinate);
+  }
   if (!(c.fovY > 0.0f && c.fovY < 180.0f)) r.errorAt("fov", "must lie in (0, 180) degrees, got {}", c.fovY);
   const vec3 d = c.to - c.from;
   if (!(glm::length(d) > 0.0f)) r.error("'from' and 'to' coincide: no view direction");
@@ -268,7 +274,8 @@ Displacement parseDisplacement(const Reader& r, MapCache& cache) {
   return d;
 }
 
-const std::initializer_list<const char*> kMeshKeys = {"file", "shape", "transform", "albedo", "displacement"};
+const std::initializer_list<const char*> kMeshKeys = {"file",   "shape",       "transform",
+                                                      "albedo", "displacement", "normals"};
 const std::initializer_list<const char*> kDisplacementKeys = {"map", "scale", "bias", "tiling", "flip_v"};
 const std::initializer_list<const char*> kTransformKeys = {"translate", "rotate", "scale", "matrix"};
 
@@ -342,6 +349,17 @@ void checkDisplacement(const Reader& r, const Mesh& mesh, const Displacement& d)
   vec2 maxUV(0.0f);
   for (const glm::uvec3& f : mesh.triangles)
     for (int k = 0; k < 3; ++k) maxUV = glm::max(maxUV, glm::abs(mesh.uvs[f[k]]));
+  // Displaced points p + h·n (n unit) stay within kMaxCoordinate, as the traversal needs.
+  double maxP = 0.0;
+  for (const glm::uvec3& f : mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 3; ++a) maxP = std::max(maxP, double(std::abs(mesh.positions[f[k]][a])));
+  const double maxH = std::max(std::abs(lo), std::abs(hi));
+  if (!(maxP + maxH <= double(kMaxCoordinate)))
+    r.errorAt("displacement.scale",
+              "displaced points reach {:.4g} (positions up to {:.4g}, heights up to {:.4g}: map {} with H in [{}, {}], "
+              "scale {}, bias {}), beyond the supported coordinate range 2^40 = {:.4g}",
+              maxP + maxH, maxP, maxH, d.map->name(), raw.lo, raw.hi, d.scale, d.bias, kMaxCoordinate);
   const double su = double(maxUV.x) * d.tiling.x * d.map->width(), sv = double(maxUV.y) * d.tiling.y * d.map->height();
   constexpr double kMaxSample = double(1 << 30);
   if (!(su < kMaxSample && sv < kMaxSample))
@@ -358,6 +376,11 @@ SceneMesh parseMesh(const Reader& r, MapCache& cache) {
   SceneMesh sm;
   MeshLoadOptions opts;
   if (r.has("transform")) opts.transform = parseTransform(r.object("transform"));
+  if (r.has("normals")) {
+    const std::string n = r.string("normals");
+    if (n != "file" && n != "smooth") r.errorAt("normals", "must be \"file\" or \"smooth\", got {}", shown(json(n)));
+    opts.smoothNormals = n == "smooth";
+  }
   sm.albedo = r.vector3("albedo", sm.albedo);
   for (int a = 0; a < 3; ++a)
     if (!(sm.albedo[a] >= 0.0f && sm.albedo[a] <= 1.0f)) r.errorAt("albedo", "components must lie in [0, 1]");
@@ -462,6 +485,56 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
   return s;
 }
 
+// nlohmann::json keeps the last of duplicate keys silently; a scene file with two
+// "scale"s is a mistake to report, by key path. Tracks the open objects and arrays
+// through the parser's events.
+class DuplicateKeys {
+ public:
+  explicit DuplicateKeys(std::string file) : file_(std::move(file)) {}
+  bool operator()(json::parse_event_t event, const json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start: open_.push_back({true, {}, {}, 0}); break;
+      case json::parse_event_t::array_start: open_.push_back({false, {}, {}, 0}); break;
+      case json::parse_event_t::key: {
+        Open& o = open_.back();
+        o.key = parsed.get<std::string>();
+        if (!o.keys.insert(o.key).second) fail(file_, "duplicate key '{}'", path());
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        if (!open_.empty()) open_.pop_back();
+        [[fallthrough]];
+      case json::parse_event_t::value:
+        if (!open_.empty() && !open_.back().object) ++open_.back().index;
+        break;
+    }
+    return true;
+  }
+
+ private:
+  struct Open {
+    bool object;
+    std::set<std::string> keys;
+    std::string key;  // objects: the current key
+    size_t index;     // arrays: the current element
+  };
+  std::string path() const {
+    std::string p;
+    for (const Open& o : open_) {
+      if (!o.object) {
+        p += fmt::format("[{}]", o.index);
+        continue;
+      }
+      if (!p.empty()) p += '.';
+      p += shownKey(o.key);
+    }
+    return p;
+  }
+  std::string file_;
+  std::vector<Open> open_;
+};
+
 // Every error is one line, whatever a file name or a library message contains.
 [[noreturn]] void rethrowOneLine(const Error& e) {
   std::string msg = e.what();
@@ -488,9 +561,12 @@ Scene loadScene(const std::string& path) {
     std::ifstream in(path);
     if (!in) fail(path, "cannot open file");
     json j;
+    DuplicateKeys duplicates(path);
     try {
       // Comments are allowed: scene files are written by hand.
-      j = json::parse(in, nullptr, true, /*ignore_comments=*/true);
+      j = json::parse(
+          in, [&](int, json::parse_event_t event, json& parsed) { return duplicates(event, parsed); }, true,
+          /*ignore_comments=*/true);
     } catch (const json::exception& e) {  // parse_error, or out_of_range for 1e400
       fail(path, "malformed JSON: {}", e.what());
     }

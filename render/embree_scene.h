@@ -35,6 +35,30 @@ struct AccelOptions {
 // The traversal configuration a scene file asks for (its "strategies" block).
 TraversalConfig traversalConfigOf(const Scene& scene);
 
+// The pre-tessellation baseline's size for one displaced mesh, computed before it is
+// built (EmbreeScene refuses a scene whose micro-triangles would not fit in memory).
+struct TessellationEstimate {
+  // Embree's BVH over the micro-triangles (RTC_SCENE_FLAG_ROBUST, default quality),
+  // measured on grids of 2-134 M triangles: 54-64 bytes per triangle after the build,
+  // 84-98 in all (RSS) at the peak of the build (docs/range_query.md, "Memory").
+  static constexpr size_t kBvhBytesPerTriangle = 64;
+  static constexpr size_t kBvhBuildBytesPerTriangle = 100;
+
+  size_t microTriangles = 0;  // exact: what the baseline builds
+  size_t vertices = 0;        // shared vertices, an upper bound (Euler's formula per patch)
+  size_t tableBytes = 0;      // the patches' vertex tables, all of them
+  size_t largestTable = 0;    // and the largest one
+  size_t geometryBytes() const {  // vertices + padding, uvs, indices, base prims, as stored
+    return (vertices + 1) * sizeof(vec4) + vertices * sizeof(vec2) + microTriangles * (sizeof(glm::uvec3) + 4);
+  }
+  size_t bvhBytes() const { return microTriangles * kBvhBytesPerTriangle; }
+  size_t patchBytes() const { return vertices * (sizeof(vec4) + sizeof(vec2)) + microTriangles * sizeof(glm::uvec3); }
+};
+TessellationEstimate estimateTessellation(const Mesh& mesh, const Displacement& d);
+// Bytes held at the peak of building these meshes' tessellations and their BVH
+// (patches with their vertex tables, the concatenated buffers, Embree's build).
+size_t tessellationPeakBytes(const std::vector<TessellationEstimate>& meshes, size_t threads);
+
 class EmbreeScene {
  public:
   EmbreeScene(const Scene& scene, const AccelOptions& opts);
@@ -49,6 +73,13 @@ class EmbreeScene {
   std::string geometryName() const;
 
   MemoryReport memory() const;
+  // Prisms of each displaced mesh traced by the traversal: built, and with projection
+  // bounds (the rest are traversed box-only).
+  struct PrismCounts {
+    int mesh = -1;
+    size_t built = 0, wellPosed = 0;
+  };
+  std::vector<PrismCounts> prismCounts() const;
   size_t microTriangles() const { return microTriangles_; }
   size_t baseTriangles() const { return baseTriangles_; }
   double buildSeconds() const { return buildSeconds_; }

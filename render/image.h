@@ -1,5 +1,5 @@
 // RGB float images written through OpenImageIO: PNG/JPEG get sRGB-encoded 8-bit,
-// EXR/HDR/TIFF float keep linear values.
+// EXR/HDR/TIFF/PFM float keep linear values.
 #pragma once
 
 #include "core/math.h"
@@ -17,7 +17,11 @@ struct Image {
   const vec3& at(int x, int y) const { return pixels[size_t(y) * width + x]; }
 };
 
-// Throws oblong::Error naming the file when it cannot be written.
+// Throws oblong::Error naming the file when it cannot be written (render/output.h: a
+// temporary file renamed into place, every write checked). .pfm is written by hand
+// (OpenImageIO reads PFM but cannot write it).
 void writeImage(const Image& img, const std::string& path);
+// Before any work: the path can be written (checkOutputPath) and names a format.
+void checkImageOutput(const std::string& path, const std::string& what = "image");
 
 }  // namespace oblong

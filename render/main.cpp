@@ -7,13 +7,21 @@
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
 // --splitter, --marching-scale, --inversion-in-traversal, --baseline, --step.
 // Without a scene file, the built-in default scene is used (no data files needed).
-// Every bad input ends with one line "oblong: FILE: problem" and exit status 1.
+// Every bad input ends with one line "oblong: FILE: problem" and exit status 1; every
+// output path is checked before any work. Ctrl-C during `render` finishes the tiles in
+// flight, writes what was rendered (marked partial in --stats) and exits with 130.
+#include "oblong_version.h"
+
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/procedural.h"
 #include "core/scene.h"
 #include "core/stats.h"
 #include "inversion/ceres.h"
 #include "render/embree_scene.h"
+#include "render/image.h"
+#include "render/output.h"
+#include "render/progress.h"
 #include "render/rays_io.h"
 #include "render/renderer.h"
 #include "render/vulkan/commands.h"
@@ -28,17 +36,25 @@
 #include <nlohmann/json.hpp>
 
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
+#include <sys/resource.h>
+
+#include <atomic>
 #include <bit>
+#include <charconv>
 #include <chrono>
-#include <fstream>
+#include <csignal>
 #include <optional>
 #include <regex>
 
 using namespace oblong;
 
 namespace {
+
+// As for a scene's image block (core/scene.cpp).
+constexpr int64_t kMaxImagePixels = int64_t(1) << 26;
 
 Scene sceneFrom(const std::string& path) { return path.empty() ? defaultScene() : loadScene(path); }
 
@@ -51,7 +67,41 @@ ivec2 parseSize(const std::string& s) {
   if (!std::regex_match(s, m, re)) fail("--size", "expected WxH with positive integers, got '{}'", s);
   const ivec2 v(std::stoi(m[1]), std::stoi(m[2]));
   if (v.x <= 0 || v.y <= 0) fail("--size", "expected positive sizes, got '{}'", s);
+  if (int64_t(v.x) * v.y > kMaxImagePixels)
+    fail("--size", "{}x{} pixels is more than the supported 2^26 (8192x8192), as in a scene's image block", v.x, v.y);
   return v;
+}
+
+// A seed is a decimal integer in [0, 2^64): no sign, no wrap-around.
+uint64_t parseSeed(const std::string& s) {
+  uint64_t v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || s[0] == '-' || s[0] == '+' || ec != std::errc() || end != s.data() + s.size())
+    fail("--seed", "expected an integer in [0, 2^64), got '{}'", s);
+  return v;
+}
+
+// Set by Ctrl-C; a second Ctrl-C kills at once (SA_RESETHAND).
+std::atomic<bool> gInterrupted{false};
+extern "C" void onInterrupt(int) { gInterrupted.store(true); }
+void catchInterrupt() {
+  struct sigaction sa {};
+  sa.sa_handler = onInterrupt;
+  sa.sa_flags = SA_RESETHAND;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+}
+constexpr int kInterruptedStatus = 130;  // 128 + SIGINT, as shells report it
+
+size_t peakMemoryBytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return size_t(u.ru_maxrss) * 1024;  // KiB on Linux
+}
+
+int threadsUsed(int requested) {
+  const int hw = tbb::info::default_concurrency();
+  return requested > 0 ? std::min(requested, hw) : hw;
 }
 
 std::string human(size_t bytes) {
@@ -71,11 +121,14 @@ struct StrategyFlags {
     app->add_option("--range", range, "RangeQuery: rmip | minmax_mipmap | safety_zones");
     app->add_option("--inverter", inverter, "Inverter: newton | cubic | ceres");
     app->add_option("--splitter", splitter, "Splitter: midpoint2d | midpoint3d | quadtree");
-    app->add_option("--marching-scale", marchingScale, "rectangles of at most this many texels are marched");
+    app->add_option("--marching-scale", marchingScale,
+                    "rectangles of at most this many texels are marched (>= 1/64; default: the scene's, 4)");
     app->add_option("--inversion-in-traversal", inversionInTraversal, "invert box intervals (true | false)");
     app->add_option("--baseline", baseline, "tessellated | bruteforce | fixedstep (instead of the traversal)")
         ->check(CLI::IsMember({"tessellated", "bruteforce", "fixedstep"}));
-    app->add_option("--step", step, "world-space step of --baseline fixedstep (default: one texel)");
+    app->add_option("--step", step,
+                    "world-space step of --baseline fixedstep (default: one texel; at least 1/64 of the smallest "
+                    "texel's world size)");
   }
 
   AccelOptions resolve(const Scene& scene) const {
@@ -92,12 +145,14 @@ struct StrategyFlags {
     pick(c.inverter, c.inverterParams, inverter);
     pick(c.splitter, c.splitterParams, splitter);
     if (marchingScale) {
-      if (!(*marchingScale > 0)) fail("--marching-scale", "must be > 0, got {}", *marchingScale);
+      if (!(*marchingScale >= kMinMarchingScale) || !std::isfinite(*marchingScale))
+        fail("--marching-scale", "must be a finite number of texels >= {} (smaller only multiplies the work), got {}",
+             kMinMarchingScale, *marchingScale);
       c.marchingScale = *marchingScale;
     }
     if (inversionInTraversal) c.inversionInTraversal = *inversionInTraversal;
     if (step) {
-      if (!(*step > 0)) fail("--step", "must be > 0, got {}", *step);
+      if (!(*step > 0) || !std::isfinite(*step)) fail("--step", "must be a finite number > 0, got {}", *step);
       if (baseline != "fixedstep") fail("--step", "only applies to --baseline fixedstep");
       c.fixedStep = *step;
     }
@@ -121,48 +176,105 @@ nlohmann::json configJson(const AccelOptions& o) {
   return j;
 }
 
-void writeJson(const std::string& path, const nlohmann::json& j) {
-  std::ofstream f(path);
-  if (!f) fail(path, "cannot write statistics");
-  f << j.dump(2) << "\n";
+void writeJson(const std::string& path, const nlohmann::json& j) { writeTextOutput(path, j.dump(2) + "\n"); }
+
+// What every --stats file records about the run itself.
+void runJson(nlohmann::json& j, int threadsRequested, double loadSeconds, double wallSeconds) {
+  j["version"] = OBLONG_VERSION;
+  j["threads"] = {{"requested", threadsRequested}, {"used", threadsUsed(threadsRequested)}};
+  j["seconds"]["load"] = loadSeconds;
+  j["seconds"]["total"] = wallSeconds;
+  j["peak_memory"] = peakMemoryBytes();
+}
+
+// Prisms that lost their projection bounds are traversed box-only, much slower; say so.
+void warnBoxOnly(const Scene& scene, const EmbreeScene& accel) {
+  for (const auto& p : accel.prismCounts()) {
+    const size_t boxOnly = p.built - p.wellPosed;
+    if (boxOnly == 0) continue;
+    fmt::print(stderr,
+               "oblong: warning: {}: meshes[{}]: {} of {} prisms are box-only (no projection bounds: the triangle is "
+               "too far from the origin for its size, or too thin), which makes them much slower to trace\n",
+               scene.path, p.mesh, boxOnly, p.built);
+  }
 }
 
 struct RenderFlags {
   std::string out = "oblong.png", size, statsPath, aovs, heatmap, integrator = "path", normals = "micro";
+  std::string seed = "0", progress = "auto";
   int threads = 0, spp = 1, maxDepth = 5;
-  uint64_t seed = 0;
-  bool quiet = false;
+  bool quiet = false, defaultOut = true;
 };
 
 int runRender(const std::string& scenePath, const RenderFlags& f, const StrategyFlags& flags) {
-  Scene scene = sceneFrom(scenePath);
-  const AccelOptions accelOpts = flags.resolve(scene);
-  RenderOptions opts;
-  opts.size = f.size.empty() ? scene.imageSize : parseSize(f.size);
+  // Everything the command line decides is checked before the scene is loaded.
   if (f.threads < 0) fail("--threads", "must be >= 0, got {}", f.threads);
   if (f.spp <= 0) fail("--spp", "must be >= 1, got {}", f.spp);
   if (f.maxDepth <= 0) fail("--max-depth", "must be >= 1, got {}", f.maxDepth);
+  RenderOptions opts;
+  if (!f.size.empty()) opts.size = parseSize(f.size);
   opts.threads = f.threads;
   opts.spp = f.spp;
   opts.maxDepth = f.maxDepth;
-  opts.seed = f.seed;
+  opts.seed = parseSeed(f.seed);
   opts.integrator = parseIntegrator(f.integrator);
   opts.normals = parseShadingNormals(f.normals);
-  opts.progress = !f.quiet;
+  const ProgressMode mode = f.quiet ? ProgressMode::Never : parseProgressMode(f.progress);
+  checkImageOutput(f.out, "image");
+  if (!f.aovs.empty()) {
+    checkImageOutput(f.aovs, "AOVs");
+    std::string ext = std::filesystem::path(f.aovs).extension().string();
+    for (char& c : ext) c = char(std::tolower((unsigned char)c));
+    if (ext != ".exr") fail(f.aovs, "AOVs are written as one multi-channel EXR: use a .exr name");
+  }
+  if (!f.heatmap.empty()) checkImageOutput(f.heatmap, "heat map");
+  if (!f.statsPath.empty()) checkOutputPath(f.statsPath, "statistics");
+  checkDistinctOutputs({{"-o", f.out}, {"--aovs", f.aovs}, {"--heatmap", f.heatmap}, {"--stats", f.statsPath}});
+
+  Progress progress(mode);
+  progress.phase("loading " + (scenePath.empty() ? std::string("the built-in scene") : scenePath));
+  Scene scene = sceneFrom(scenePath);
+  const double loadSeconds = progress.elapsed();
+  const AccelOptions accelOpts = flags.resolve(scene);
+  if (f.size.empty()) opts.size = scene.imageSize;
+  {
+    // Colour, depth, normal and four counters per pixel; the AOV file and the heat map
+    // are encoded from copies.
+    const size_t perPixel = 44 + (f.aovs.empty() ? 3 : 44) + (f.heatmap.empty() ? 0 : 15);
+    const size_t px = size_t(opts.size.x) * size_t(opts.size.y);
+    checkFits(f.size.empty() ? scene.path : std::string("--size"), "rendering at this size", px * perPixel,
+              "choose a smaller --size", fmt::format("{}x{} pixels, {} bytes each", opts.size.x, opts.size.y, perPixel));
+  }
+  opts.progress = &progress;
+  opts.interrupt = &gInterrupted;
   Stats::reset();
-  if (deviceFlag == "vulkan") return vk::renderCommand(scene, accelOpts, opts, f.out, f.aovs, f.heatmap, f.statsPath);
+  if (deviceFlag == "vulkan") {
+    progress.clear();
+    return vk::renderCommand(scene, accelOpts, opts, f.out, f.aovs, f.heatmap, f.statsPath);
+  }
+  progress.phase(accelOpts.tessellate ? "pre-tessellating" : "building the acceleration structures");
   EmbreeScene accel(scene, accelOpts);
+  progress.clear();
+  warnBoxOnly(scene, accel);
+  if (gInterrupted) {
+    fmt::print(stderr, "oblong: interrupted before rendering: nothing written\n");
+    return kInterruptedStatus;
+  }
+  progress.phase(fmt::format("rendering {}x{} at {} spp", opts.size.x, opts.size.y, opts.spp),
+                 int64_t(opts.size.x) * opts.size.y);
   RenderResult res = render(scene, accel, opts);
+  progress.phase("writing " + f.out);
   writeImage(res.aov.color, f.out);
   if (!f.aovs.empty()) writeAOVs(res.aov, f.aovs);
   if (!f.heatmap.empty()) writeHeatMap(res.aov, f.heatmap);
+  progress.clear();
   const MemoryReport mem = accel.memory();
   const double rays = double(res.primaryRays + res.secondaryRays);
   const double mrays = rays / std::max(res.seconds, 1e-9) * 1e-6;
   double meanPrimarySteps = 0;
   for (float st : res.aov.steps) meanPrimarySteps += st;
-  meanPrimarySteps /= double(std::max<size_t>(1, res.aov.steps.size()));
-  fmt::print("oblong render: {} -> {}\n", scene.path, f.out);
+  meanPrimarySteps /= double(std::max<int64_t>(1, res.pixelsDone));
+  fmt::print("oblong render: {} -> {}{}\n", scene.path, f.out, f.defaultOut ? " (the default name; -o chooses)" : "");
   if (accel.tessellated())
     fmt::print("  geometry : pre-tessellated (baseline), {} base triangles, {} micro-triangles, built in {:.2f} s\n",
                accel.baseTriangles(), accel.microTriangles(), accel.buildSeconds());
@@ -172,10 +284,13 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   for (const auto& m : mem) fmt::print("  memory   : {:<24} {}\n", m.name, human(m.bytes));
   fmt::print(
       "  summary  : {}x{} {} spp {}, {:.3f} s, {:.2f} Mrays/s ({} camera + {} secondary rays, {:.1f}% hit), "
-      "{:.1f} steps/camera ray, {:.1f} steps/ray, memory {}\n",
+      "{:.1f} steps/camera ray, {:.1f} steps/ray, memory {}, peak {}\n",
       opts.size.x, opts.size.y, opts.spp, integratorName(opts.integrator), res.seconds, mrays, res.primaryRays,
       res.secondaryRays, 100.0 * res.hits / std::max<int64_t>(1, res.primaryRays), meanPrimarySteps,
-      double(res.counters.steps()) / std::max(1.0, rays), human(totalBytes(mem)));
+      double(res.counters.steps()) / std::max(1.0, rays), human(totalBytes(mem)), human(peakMemoryBytes()));
+  if (res.partial)
+    fmt::print("  partial  : interrupted; {} of {} pixels rendered (the rest is black)\n", res.pixelsDone,
+               int64_t(opts.size.x) * opts.size.y);
   if (!f.heatmap.empty()) {
     float maxSteps = 0;
     for (float st : res.aov.steps) maxSteps = std::max(maxSteps, st);
@@ -192,8 +307,9 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
     j["normals"] = shadingNormalsName(opts.normals);
     j["spp"] = opts.spp;
     j["seed"] = opts.seed;
-    j["threads"] = f.threads;
     j["seconds"] = {{"build", accel.buildSeconds()}, {"render", res.seconds}};
+    j["partial"] = res.partial;
+    j["pixels"] = {{"rendered", res.pixelsDone}, {"total", int64_t(opts.size.x) * opts.size.y}};
     j["rays"] = {{"primary", res.primaryRays}, {"secondary", res.secondaryRays}, {"hits", res.hits}};
     j["mrays_per_second"] = mrays;
     j["steps_per_camera_ray"] = meanPrimarySteps;
@@ -201,35 +317,50 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
     j["memory_total"] = totalBytes(mem);
     j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
     j["counters"] = Stats::snapshot();
+    runJson(j, f.threads, loadSeconds, progress.elapsed());
     writeJson(f.statsPath, j);
   }
-  return 0;
+  return res.partial ? kInterruptedStatus : 0;
 }
 
-int runTrace(const std::string& scenePath, const std::string& raysPath, const std::string& out, int threads,
-             const std::string& statsPath, const StrategyFlags& flags) {
+int runTrace(const std::string& scenePath, const std::string& raysPath, const std::string& out, bool defaultOut,
+             int threads, const std::string& statsPath, const StrategyFlags& flags) {
   if (threads < 0) fail("--threads", "must be >= 0, got {}", threads);
+  checkOutputPath(out, "hits");
+  if (!statsPath.empty()) checkOutputPath(statsPath, "statistics");
+  checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}, {"--stats", statsPath}});
+  const auto start = std::chrono::steady_clock::now();
   Scene scene = sceneFrom(scenePath);
   const AccelOptions accelOpts = flags.resolve(scene);
   const std::vector<Ray> rays = readRays(raysPath);
+  const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Stats::reset();
   if (deviceFlag == "vulkan") return vk::traceCommand(scene, accelOpts, rays, raysPath, out, statsPath);
   EmbreeScene accel(scene, accelOpts);
+  warnBoxOnly(scene, accel);
   std::vector<Hit> hits(rays.size());
   std::vector<RayCounters> perRay(rays.size());
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  const auto start = std::chrono::steady_clock::now();
-  tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) { hits[i] = accel.intersect(rays[i], &perRay[i]); });
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto traceStart = std::chrono::steady_clock::now();
+  tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) {
+    if (!gInterrupted.load(std::memory_order_relaxed)) hits[i] = accel.intersect(rays[i], &perRay[i]);
+  });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - traceStart).count();
+  // A hits file must hold every ray's answer: an interrupted trace writes none.
+  if (gInterrupted) {
+    fmt::print(stderr, "oblong: interrupted: no hits written (a hits file holds every ray or none)\n");
+    return kInterruptedStatus;
+  }
   writeHits(out, hits);
   RayCounters total;
   size_t found = 0;
   for (size_t i = 0; i < rays.size(); ++i) total += perRay[i], found += hits[i].valid();
   const MemoryReport mem = accel.memory();
-  fmt::print("oblong trace: {} rays -> {}: {} hits, {}, {:.3f} s, {:.2f} Mrays/s, {:.1f} steps/ray, memory {}\n",
-             rays.size(), out, found, accel.geometryName(), seconds, rays.size() / std::max(seconds, 1e-9) * 1e-6,
+  fmt::print("oblong trace: {} rays -> {}{}: {} hits, {}, {:.3f} s, {:.2f} Mrays/s, {:.1f} steps/ray, memory {}\n",
+             rays.size(), out, defaultOut ? " (the default name; -o chooses)" : "", found, accel.geometryName(),
+             seconds, rays.size() / std::max(seconds, 1e-9) * 1e-6,
              double(total.steps()) / std::max<size_t>(1, rays.size()), human(totalBytes(mem)));
   if (!statsPath.empty()) {
     nlohmann::json j;
@@ -237,24 +368,17 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
     j["rays"] = {{"file", raysPath}, {"count", rays.size()}, {"hits", found}};
     j["geometry"] = accel.geometryName();
     j["config"] = configJson(accelOpts);
-    j["threads"] = threads;
     j["seconds"] = {{"build", accel.buildSeconds()}, {"trace", seconds}};
     j["mrays_per_second"] = rays.size() / std::max(seconds, 1e-9) * 1e-6;
     for (const auto& m : mem) j["memory"][m.name] = m.bytes;
     j["memory_total"] = totalBytes(mem);
     j["ray_counters"] = countersJson(total, int64_t(rays.size()));
     j["counters"] = Stats::snapshot();
+    runJson(j, threads, loadSeconds,
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     writeJson(statsPath, j);
   }
   return 0;
-}
-
-// Entries of one axis of RMIP layer p over n pixels (corner stride 2^shift): mirrors
-// strategies/rmip.cpp, which keeps the layer table private; runInfo checks the sum
-// against the built layers' bytes and drops the breakdown if they ever disagree.
-int rmipEntries(int n, int p, int shift, bool wrap) {
-  const int s = 1 << shift;
-  return wrap ? (n + s - 1) / s : (n - (1 << p)) / s + 1;
 }
 
 // What the range query chosen for one displaced mesh built (DESIGN invariant 4): its
@@ -269,16 +393,22 @@ void printRangeQuery(const RangeQuery& rq, const TraversalConfig& cfg) {
                r->downsample(), r->downsample() == 1 ? "" : "s", c);
     fmt::print("      layers   : (p, q) for p 0..{}, q 0..{}: {} layers of the {} a full pyramid has "
                "(block 2^p x 2^q texels)\n", P, Q, (P + 1) * (Q + 1), (fullP + 1) * (fullQ + 1));
-    // Bytes per layer; the layers with and without the wrapping corners.
-    size_t sum = 0, noWrap = 0;
+    // Bytes per layer, from the layout the constructor used (Rmip::layout), and the
+    // same layout without the wrapping corners.
+    Rmip::Options o;
+    o.compression = c;
+    o.resolution = cfg.rangeParams.is_object() ? cfg.rangeParams.value("resolution", 0) : 0;
+    const Rmip::Layout L = Rmip::layout(W, H, rq.needs(), o);
+    QueryNeeds inside = rq.needs();
+    inside.wrap = false;
+    const size_t noWrap = Rmip::layout(W, H, inside, o).entries * sizeof(Interval);
+    size_t sum = 0;
     std::vector<std::vector<size_t>> bytes(size_t(P + 1), std::vector<size_t>(size_t(Q + 1)));
-    for (int p = 0; p <= P; ++p)
-      for (int q = 0; q <= Q; ++q) {
-        const int sx = std::max(p - c, 0), sy = std::max(q - c, 0);
-        bytes[p][q] = size_t(rmipEntries(rw, p, sx, r->storesWrap())) * rmipEntries(rh, q, sy, r->storesWrap()) *
-                      sizeof(Interval);
+    for (int p = 0; p <= P && p <= L.P; ++p)
+      for (int q = 0; q <= Q && q <= L.Q; ++q) {
+        const Rmip::Layer& l = L.layers[size_t(p) * (L.Q + 1) + q];
+        bytes[p][q] = size_t(l.nx) * size_t(l.ny) * sizeof(Interval);
         sum += bytes[p][q];
-        noWrap += size_t(rmipEntries(rw, p, sx, false)) * rmipEntries(rh, q, sy, false) * sizeof(Interval);
       }
     size_t built = 0;
     for (const auto& m : rq.memory())
@@ -349,16 +479,17 @@ int runInfo(const std::string& scenePath, const std::string& range) {
     fmt::print("    needs    : range queries up to {}x{} samples; wrapping queries {}; LoD off\n", needs.maxExtentX,
                needs.maxExtentY,
                !needs.wrap ? "no" : tiled ? "yes (the map is tiled)" : "yes (triangles' cells cross the map border)");
+    // Built once, as the renderer builds it; what is shown is that structure.
     const auto is = createIntersector(cfg, tris, d);
-    ParamSet params(cfg.rangeParams, "strategies.range");
-    const auto rq = createRangeQuery(cfg.range, params, RangeQueryContext{d, needs});
-    fmt::print("    range query '{}' for displaced mesh {}:\n", rq->name(), displaced);
-    printRangeQuery(*rq, cfg);
-    size_t prisms = 0, wellPosed = 0;
     if (const auto* t = dynamic_cast<const TraversalIntersectorBase*>(is.get())) {
+      fmt::print("    range query '{}' for displaced mesh {}:\n", t->rangeQuery().name(), displaced);
+      printRangeQuery(t->rangeQuery(), cfg);
+      size_t prisms = 0, wellPosed = 0;
       for (const PrismParams& pp : t->mesh().params) prisms += pp.valid, wellPosed += pp.valid && pp.wellPosed;
       fmt::print("    prisms   : {} built ({} well-posed, {} box-only), {} skipped (not displaceable)\n", prisms,
                  wellPosed, prisms - wellPosed, tris.size() - prisms);
+    } else {
+      fmt::print("    baseline '{}': no range query\n", is->name());
     }
     const MemoryReport mem = is->memory();
     std::string parts;
@@ -371,6 +502,7 @@ int runInfo(const std::string& scenePath, const std::string& range) {
   else
     fmt::print("  total    : {} built for {} displaced mesh{} (plus Embree's BVH, reported by oblong render)\n",
                human(total), displaced, displaced == 1 ? "" : "es");
+  fmt::print("  peak     : {} of process memory (each structure above built once)\n", human(peakMemoryBytes()));
   return 0;
 }
 
@@ -379,6 +511,8 @@ int runInfo(const std::string& scenePath, const std::string& range) {
 int main(int argc, char** argv) {
   CLI::App app{"oblong: ray tracing displaced triangle meshes without tessellation"};
   app.require_subcommand(1);
+  // --help shows every option's default (subcommands copy these option defaults).
+  app.option_defaults()->always_capture_default();
   std::string scenePath, statsPath, range, raysPath, hitsPath = "hits.csv";
   int threads = 0;
   StrategyFlags flags;
@@ -386,18 +520,21 @@ int main(int argc, char** argv) {
 
   auto* render = app.add_subcommand("render", "render a scene (default: the built-in scene)");
   render->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
-  render->add_option("-o,--output", rf.out, "output image (.png, .exr, ...)");
-  render->add_option("--size", rf.size, "image size WxH (default: the scene's)");
+  auto* renderOut = render->add_option("-o,--output", rf.out, "output image (.png, .exr, .tif, .hdr, .pfm, ...)");
+  render->add_option("--size", rf.size, "image size WxH, at most 2^26 pixels (default: the scene's)");
   render->add_option("--threads", rf.threads, "worker threads (0: all cores)");
   render->add_option("--spp", rf.spp, "samples per pixel");
   render->add_option("--integrator", rf.integrator, "primary | ao | path");
   render->add_option("--max-depth", rf.maxDepth, "path: longest path (vertices)");
   render->add_option("--normals", rf.normals,
                      "shading normals: micro (the micro-triangle's) | smooth (PDM paper §5.1)");
-  render->add_option("--seed", rf.seed, "random seed (same seed, same image, any thread count)");
+  render->add_option("--seed", rf.seed, "random seed in [0, 2^64) (same seed, same image, any thread count)");
   render->add_option("--aovs", rf.aovs, "multi-channel EXR: colour, depth, normal, per-pixel counters");
   render->add_option("--heatmap", rf.heatmap, "false-colour log-scale heat map of traversal steps (PNG)");
-  render->add_flag("-q,--quiet", rf.quiet, "no progress bar");
+  render->add_flag("-q,--quiet", rf.quiet, "no progress display (same as --progress never)");
+  render->add_option("--progress", rf.progress,
+                     "phases, elapsed time and ETA on stderr: auto (on a terminal) | always (also plain lines to a "
+                     "file or pipe) | never");
   render->add_option("--stats", rf.statsPath, "write configuration, timings, counters and memory as JSON");
   flags.add(render);
   render->add_option("--device", deviceFlag, "cpu (Embree) | vulkan (ray tracing pipeline, docs/vulkan.md)")
@@ -407,7 +544,8 @@ int main(int argc, char** argv) {
   trace->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
   trace->add_option("--rays", raysPath, "rays: CSV (ox,oy,oz,dx,dy,dz,tmin,tmax) or .bin (8 float32 per ray)")
       ->required();
-  trace->add_option("-o,--output", hitsPath, "hits: CSV (t,mesh,prim,u,v)");
+  auto* traceOut = trace->add_option("-o,--output", hitsPath,
+                                     "hits: CSV (t,mesh,prim,u,v; t in units of |d|, u,v texture coordinates)");
   trace->add_option("--threads", threads, "worker threads (0: all cores)");
   trace->add_option("--stats", statsPath, "write configuration, timings, counters and memory as JSON");
   flags.add(trace);
@@ -421,11 +559,20 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    // One line and exit status 1, as for any other bad input.
+    std::string what = e.what();
+    for (char& c : what)
+      if (c == '\n' || c == '\r') c = ' ';
+    while (!what.empty() && what.back() == ' ') what.pop_back();
+    fmt::print(stderr, "oblong: command line: {} (oblong --help lists the options)\n", what);
+    return 1;
   }
   try {
+    catchInterrupt();
+    rf.defaultOut = renderOut->count() == 0;
     if (*render) return runRender(scenePath, rf, flags);
-    if (*trace) return runTrace(scenePath, raysPath, hitsPath, threads, statsPath, flags);
+    if (*trace) return runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, flags);
     if (*info) return runInfo(scenePath, range);
   } catch (const Error& e) {
     fmt::print(stderr, "oblong: {}\n", e.what());

@@ -1,10 +1,13 @@
 #include "render/rays_io.h"
 
 #include "core/error.h"
+#include "render/output.h"
 
 #include <fmt/format.h>
 
 #include <charconv>
+#include <filesystem>
+#include <iterator>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -46,17 +49,41 @@ float parseFloat(const std::string& f, const std::string& where, const char* fie
   return v;
 }
 
+// The traversal multiplies up to three coordinates in float, and Embree asserts on
+// rays beyond ~1.8e18: origins stay within the scene's coordinate limit, and directions
+// are not normalised (t is in units of |d|) but must be normalisable without overflow
+// or underflow.
+constexpr double kMinDirection = 1.0 / double(1ull << 40), kMaxDirection = double(1ull << 40);
+
 void checkRay(const Ray& r, const std::string& where) {
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(r.o[a]) || !std::isfinite(r.d[a])) fail(where, "ray origin and direction must be finite");
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(r.o[a]) > kMaxCoordinate)
+      fail(where, "ray origin ({}, {}, {}) is beyond the coordinate limit {:g} (2^40)", r.o.x, r.o.y, r.o.z,
+           double(kMaxCoordinate));
   if (r.d == vec3(0.0f)) fail(where, "ray direction is zero");
+  const double len = glm::length(dvec3(r.d));
+  if (len < kMinDirection || len > kMaxDirection)
+    fail(where, "ray direction ({}, {}, {}) has length {:g}: it must be within [2^-40, 2^40] to be normalisable",
+         r.d.x, r.d.y, r.d.z, len);
   if (!std::isfinite(r.tmin) || std::isnan(r.tmax) || r.tmin > r.tmax)
     fail(where, "need finite tmin <= tmax (tmax may be inf), got [{}, {}]", r.tmin, r.tmax);
+  if (r.tmin < 0.0f) fail(where, "tmin must be >= 0, got {}", r.tmin);
+}
+
+// Ray files are read to the end: a FIFO would block, a device never ends.
+void checkRegular(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, "file not found");
+  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
 }
 
 }  // namespace
 
 std::vector<Ray> readRays(const std::string& path) {
+  checkRegular(path);
   std::vector<Ray> rays;
   if (endsWith(path, ".bin")) {
     std::ifstream f(path, std::ios::binary | std::ios::ate);
@@ -114,19 +141,16 @@ void writeRays(const std::string& path, const std::vector<Ray>& rays) {
 }
 
 void writeHits(const std::string& path, const std::vector<Hit>& hits) {
-  std::ofstream f(path);
-  if (!f) fail(path, "cannot write hit file");
-  f << kHitHeader << "\n";
-  std::string buf;
+  std::string text = std::string(kHitHeader) + "\n";
   for (const Hit& h : hits) {
     if (!h.valid()) {
-      f << "inf,,,,\n";
+      text += "inf,,,,\n";
       continue;
     }
     // %.9g round-trips a float exactly.
-    f << fmt::format("{:.9g},{},{},{:.9g},{:.9g}\n", h.t, h.mesh, h.prim, h.uv.x, h.uv.y);
+    fmt::format_to(std::back_inserter(text), "{:.9g},{},{},{:.9g},{:.9g}\n", h.t, h.mesh, h.prim, h.uv.x, h.uv.y);
   }
-  if (!f) fail(path, "write failed");
+  writeTextOutput(path, text);
 }
 
 std::vector<Hit> readHits(const std::string& path) {

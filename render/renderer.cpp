@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "render/camera.h"
+#include "render/output.h"
 #include "render/sampling.h"
 
 #include <OpenImageIO/imageio.h>
@@ -21,45 +22,6 @@
 namespace oblong {
 
 namespace {
-
-// Progress bar on stderr, only when it is a terminal; updated by a timer thread.
-class Progress {
- public:
-  Progress(bool enabled, int64_t total) : total_(total), enabled_(enabled && ::isatty(2)) {
-    if (enabled_) thread_ = std::thread([this] { loop(); });
-  }
-  ~Progress() {
-    if (!enabled_) return;
-    {
-      std::lock_guard<std::mutex> l(m_);
-      stop_ = true;
-    }
-    cv_.notify_all();
-    thread_.join();
-    draw();
-    fmt::print(stderr, "\n");
-  }
-  void add(int64_t n) { done_ += n; }
-
- private:
-  void loop() {
-    std::unique_lock<std::mutex> l(m_);
-    while (!cv_.wait_for(l, std::chrono::milliseconds(200), [this] { return stop_; })) draw();
-  }
-  void draw() {
-    const double f = total_ > 0 ? double(done_.load()) / double(total_) : 1.0;
-    const int w = 40, k = int(f * w);
-    fmt::print(stderr, "\r  [{}{}] {:5.1f}%", std::string(k, '#'), std::string(w - k, ' '), 100.0 * f);
-    std::fflush(stderr);
-  }
-  int64_t total_;
-  bool enabled_;
-  std::atomic<int64_t> done_{0};
-  std::mutex m_;
-  std::condition_variable cv_;
-  bool stop_ = false;
-  std::thread thread_;
-};
 
 struct Tracer {
   const Scene& scene;
@@ -249,12 +211,13 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
   std::unique_ptr<tbb::global_control> limit;
   if (opts.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, opts.threads);
-  Progress progress(opts.progress, int64_t(npx));
+  std::atomic<int64_t> pixelsDone{0};
   const auto start = std::chrono::steady_clock::now();
   tbb::parallel_for(tbb::blocked_range2d<int>(0, H, 16, 0, W, 16), [&](const auto& tile) {
+    if (opts.interrupt && opts.interrupt->load(std::memory_order_relaxed)) return;
     int64_t localRays = 0, localHits = 0;
     RayCounters tileCounters;
-    for (int y = tile.rows().begin(); y < tile.rows().end(); ++y)
+    for (int y = tile.rows().begin(); y < tile.rows().end(); ++y) {
       for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
         const size_t px = size_t(y) * W + x;
         vec3 sum(0.0f);
@@ -283,16 +246,20 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
         aov.inversions[px] = float(primary.inversions) * inv;
         aov.cellsMarched[px] = float(primary.cellsMarched) * inv;
       }
+      if (opts.progress) opts.progress->add(int64_t(tile.cols().size()));
+    }
     {
       std::lock_guard<std::mutex> lock(countersMutex);
       res.counters += tileCounters;
     }
     secondary += localRays;
     hits += localHits;
-    progress.add(int64_t(tile.rows().size()) * int64_t(tile.cols().size()));
+    pixelsDone += int64_t(tile.rows().size()) * int64_t(tile.cols().size());
   });
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  res.primaryRays = int64_t(npx) * opts.spp;
+  res.pixelsDone = pixelsDone;
+  res.partial = res.pixelsDone < int64_t(npx);
+  res.primaryRays = res.pixelsDone * opts.spp;
   res.secondaryRays = secondary;
   res.hits = hits;
   return res;
@@ -312,14 +279,16 @@ void writeAOVs(const AOVs& aov, const std::string& path) {
     o[4] = aov.normal[i].x, o[5] = aov.normal[i].y, o[6] = aov.normal[i].z;
     o[7] = aov.steps[i], o[8] = aov.rangeQueries[i], o[9] = aov.inversions[i], o[10] = aov.cellsMarched[i];
   }
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) fail(path, "cannot write AOVs ({})", OIIO::geterror());
-  OIIO::ImageSpec spec(W, H, C, OIIO::TypeDesc::FLOAT);
-  spec.channelnames.assign(std::begin(names), std::end(names));
-  spec.z_channel = 3;
-  if (!out->open(path, spec)) fail(path, "cannot write AOVs ({})", out->geterror());
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, px.data()) || !out->close())
-    fail(path, "cannot write AOVs ({})", out->geterror());
+  writeOutput(path, [&](const std::string& tmp) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) fail(path, "cannot write AOVs ({})", OIIO::geterror());
+    OIIO::ImageSpec spec(W, H, C, OIIO::TypeDesc::FLOAT);
+    spec.channelnames.assign(std::begin(names), std::end(names));
+    spec.z_channel = 3;
+    if (!out->open(tmp, spec)) fail(path, "cannot write AOVs ({})", out->geterror());
+    if (!out->write_image(OIIO::TypeDesc::FLOAT, px.data()) || !out->close())
+      fail(path, "cannot write AOVs ({})", out->geterror());
+  });
 }
 
 namespace {

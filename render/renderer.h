@@ -17,7 +17,9 @@
 
 #include "render/embree_scene.h"
 #include "render/image.h"
+#include "render/progress.h"
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -60,7 +62,10 @@ struct RenderOptions {
   int maxDepth = 5;          // path: bounces
   float aoRadius = 0.0f;     // ao: 0 = a quarter of the scene's bounding-box diagonal
   vec3 sky{0.12f, 0.14f, 0.18f};  // path: radiance of rays that leave the scene
-  bool progress = true;      // progress bar on stderr when it is a terminal
+  Progress* progress = nullptr;  // advanced per rendered row of a tile
+  // Set (by a SIGINT handler) to stop: tiles not yet started are skipped, the ones in
+  // flight finish, and the result is marked partial.
+  const std::atomic<bool>* interrupt = nullptr;
 };
 
 // Per-pixel outputs. Counters are the camera rays' traversal work, averaged over the
@@ -79,6 +84,8 @@ struct RenderResult {
   double seconds = 0;
   int64_t primaryRays = 0, secondaryRays = 0, hits = 0;
   RayCounters counters;  // traversal work of all rays (camera and secondary)
+  int64_t pixelsDone = 0;  // < width x height when interrupted (the rest stays black)
+  bool partial = false;
 };
 
 RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts);

@@ -10,7 +10,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace oblong {
 
@@ -190,6 +192,17 @@ std::unique_ptr<Intersector> makeFixedStep(std::vector<DisplacedTriangle> triang
   TraversalMesh mesh;
   mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });
   warnSkippedTriangles(mesh, "fixedstep");
+  if (step > 0) {  // bounded work: no step far below the smallest texel
+    double texel = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < mesh.tris.size(); ++i)
+      if (mesh.params[i].valid) {
+        const LocalFrame F = LocalFrame::make(mesh.tris[i], disp);
+        texel = std::min({texel, double(glm::length(F.PX)), double(glm::length(F.PY))});
+      }
+    if (std::isfinite(texel) && double(step) < kMinFixedStepTexels * texel)
+      fail("--step", "{} is below {} of the smallest texel's world size ({:g}): at least {:g}", step,
+           kMinFixedStepTexels, texel, kMinFixedStepTexels * texel);
+  }
   return std::make_unique<FixedStep>(std::move(mesh), step, std::move(inv));
 }
 
@@ -207,8 +220,9 @@ std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::
   if (!cfg.baseline.empty())
     fail("traversal", "unknown baseline '{}' (known: bruteforce, fixedstep; the tessellated baseline is not an "
                       "intersector)", cfg.baseline);
-  if (!(cfg.marchingScale > 0) || !std::isfinite(cfg.marchingScale))
-    fail("traversal", "marching scale must be a positive number of texels, got {}", cfg.marchingScale);
+  if (!(cfg.marchingScale >= kMinMarchingScale) || !std::isfinite(cfg.marchingScale))
+    fail("traversal", "marching scale must be a finite number of texels >= {} (smaller only multiplies the work), got {}",
+         kMinMarchingScale, cfg.marchingScale);
 
   // Invariant 4: the range query is built for what these triangles can ask.
   std::vector<Rect> boxes;

@@ -742,6 +742,7 @@ class TraversalIntersectorBase : public Intersector {
     return r;
   }
   const TraversalMesh& mesh() const { return mesh_; }
+  const RangeQuery& rangeQuery() const { return *rq_; }
 
  protected:
   std::string name_;

@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DOBLONG_BUILD_TESTS=OFF
+bash scripts/configure.sh demo build
 cmake --build build -j "$(nproc)" --target oblong
 mkdir -p out
 ./build/oblong render -o out/default.png --stats out/default_stats.json

@@ -6,19 +6,21 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 jobs=$(nproc)
 
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
+# The options are forced (scripts/configure.sh): `build/` may have been configured by
+# demo.sh without tests. A build without tests must fail here, not pass with none run.
+bash scripts/configure.sh release build
 cmake --build build -j "$jobs"
-(cd build && ctest --output-on-failure -j "$jobs")
-experiments/run_all --quick --build build  # the RMIP-paper experiments, tiny sizes (issue 6)
+(cd build && ctest --output-on-failure --no-tests=error -j "$jobs")
+experiments/run_all --quick --build build  # the RMIP-paper experiments, tiny sizes
+# The fuzzers, briefly (docs/bad_input.md): any crash, hang or leak fails the run.
+OBLONG_SKIP_SETUP=1 bash scripts/fuzz.sh "${OBLONG_FUZZ_SECONDS:-30}"
 
 if [ "${OBLONG_SKIP_SANITIZERS:-0}" != 1 ]; then
-  # Sanitizer build: unit tests only (benchmarks off), statistics on.
-  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DOBLONG_SANITIZE=ON \
-    -DOBLONG_BUILD_BENCHMARKS=OFF
+  bash scripts/configure.sh asan build-asan
   cmake --build build-asan -j "$jobs"
   # Leaks inside Debian's assimp and OpenImageIO on bad input are suppressed
   # (tests/lsan.supp says which and why); any other leak fails the test.
   (cd build-asan && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     LSAN_OPTIONS="suppressions=$PWD/../tests/lsan.supp:print_suppressions=0" \
-    ctest --output-on-failure -j "$jobs")
+    ctest --output-on-failure --no-tests=error -j "$jobs")
 fi

@@ -2,6 +2,9 @@
 // parameters in minmax_mipmap.h; design notes in docs/range_query.md.
 #include "strategies/minmax_mipmap.h"
 
+#include "core/memory.h"
+#include "strategies/rmip.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -9,20 +12,40 @@
 
 namespace oblong {
 
-MinMaxMipmap::MinMaxMipmap(const Displacement& d, const QueryNeeds& needs) : RangeQueryImpl(d, needs) {
-  const int W = map().width(), H = map().height();
+MinMaxMipmap::Layout MinMaxMipmap::layout(int W, int H, const QueryNeeds& needs) {
+  Layout L;
   // Two nodes of level k cover any range of extent <= 2^k + 1; ranges wider than the
   // map are clamped to it, so the 1x1 top level is never exceeded.
   const int e = std::max(std::min(needs.maxExtentX, W), std::min(needs.maxExtentY, H));
   const int top = int(std::bit_width(unsigned(std::max(W, H) - 1)));
-  K_ = std::min(e <= 2 ? 0 : int(std::bit_width(unsigned(e - 2))), top);
-
-  size_t total = 0;
-  for (int k = 1; k <= K_; ++k) {
-    offset_.push_back(total);
-    total += size_t(levelWidth(k)) * levelHeight(k);
+  L.K = std::min(e <= 2 ? 0 : int(std::bit_width(unsigned(e - 2))), top);
+  for (int k = 1; k <= L.K; ++k) {
+    L.offset.push_back(L.entries);
+    L.entries += size_t(levelSize(W, k)) * levelSize(H, k);
   }
-  data_.resize(total);
+  return L;
+}
+
+MinMaxMipmap::MinMaxMipmap(const Displacement& d, const QueryNeeds& needs) : RangeQueryImpl(d, needs) {
+  const int W = map().width(), H = map().height();
+  Layout L = layout(W, H, needs);
+  if (!fitsInMemory(L.bytes())) {
+    // A low-resolution, uncompressed rmip is the one smaller structure.
+    std::string hint = "free memory or use a smaller map";
+    for (int f = 2; f < 2 * std::max(W, H); f *= 2) {
+      const int res = (std::max(W, H) + f - 1) / f;
+      const size_t b = Rmip::layout(W, H, needs, {res, 0}).buildBytes();
+      if (b < L.bytes() && fitsInMemory(b)) {
+        hint = fmt::format("try --range rmip with \"resolution\": {}, \"compression\": 0 in \"strategies\": "
+                           "{{\"range\": {{...}}}} ({})", res, humanBytes(b));
+        break;
+      }
+    }
+    checkFits(map().name(), "minmax_mipmap", L.bytes(), hint, fmt::format("levels 1..{} over {}x{} texels", L.K, W, H));
+  }
+  K_ = L.K;
+  offset_ = std::move(L.offset);
+  data_.resize(L.entries);
   for (int k = 1; k <= K_; ++k) {
     const int w = levelWidth(k), h = levelHeight(k), cw = levelWidth(k - 1), ch = levelHeight(k - 1);
     tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {

@@ -25,6 +25,17 @@ OBLONG_STAT_COUNTER("minmax_mipmap/Nodes", mmNodes);
 
 class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
  public:
+  // What the constructor builds for a W x H map (the one copy of the level formulas):
+  // bytes() equals the built mipmap's bytes() and is its peak (no scratch).
+  struct Layout {
+    int K = 0;                   // top built level
+    std::vector<size_t> offset;  // offset of level k >= 1 at [k-1]
+    size_t entries = 0;
+    size_t bytes() const { return entries * sizeof(Interval) + offset.size() * sizeof(size_t); }
+  };
+  static Layout layout(int W, int H, const QueryNeeds& needs);
+  static int levelSize(int n, int k) { return ((n - 1) >> k) + 1; }
+
   MinMaxMipmap(const Displacement& d, const QueryNeeds& needs);
 
   std::string_view name() const override { return "minmax_mipmap"; }
@@ -37,8 +48,8 @@ class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
 
   // Levels 0..levels()-1 (level 0 = samples). Level k is levelWidth(k) x levelHeight(k).
   int levels() const { return K_ + 1; }
-  int levelWidth(int k) const { return ((map().width() - 1) >> k) + 1; }
-  int levelHeight(int k) const { return ((map().height() - 1) >> k) + 1; }
+  int levelWidth(int k) const { return levelSize(map().width(), k); }
+  int levelHeight(int k) const { return levelSize(map().height(), k); }
   // Raw min/max of node (i,j) of level k (0 <= i < levelWidth(k), 0 <= j < levelHeight(k)).
   Interval node(int k, int i, int j) const {
     if (k == 0) {

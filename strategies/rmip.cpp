@@ -9,6 +9,8 @@
 #include "strategies/rmip.h"
 
 #include "core/error.h"
+#include "core/memory.h"
+#include "strategies/minmax_mipmap.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -38,38 +40,80 @@ int entries(int n, int p, int shift, bool wrap) {
 
 }  // namespace
 
-Rmip::Rmip(const Displacement& d, const QueryNeeds& needs, const Options& o) : RangeQueryImpl(d, needs) {
-  const HeightMap& m = map();
-  const int W = m.width(), H = m.height();
-  f_ = o.resolution <= 0 ? 1 : std::max(1, (std::max(W, H) + o.resolution - 1) / o.resolution);
-  rw_ = (W + f_ - 1) / f_;
-  rh_ = (H + f_ - 1) / f_;
-  c_ = o.compression;
-  wrap_ = needs.wrap;
+Rmip::Layout Rmip::layout(int W, int H, const QueryNeeds& needs, const Options& o) {
+  Layout L;
+  L.f = o.resolution <= 0 ? 1 : std::max(1, (std::max(W, H) + o.resolution - 1) / o.resolution);
+  L.rw = (W + L.f - 1) / L.f;
+  L.rh = (H + L.f - 1) / L.f;
+  L.c = o.compression;
+  L.wrap = needs.wrap;
 
   // Largest pixel extent a sample extent e can map to (a partial last pixel adds one).
   auto pixExtent = [&](int e, int n) {
     e = std::max(e, 1);
-    const int px = f_ == 1 ? e : (e - 1 + f_ - 1) / f_ + 2;
+    const int px = L.f == 1 ? e : (e - 1 + L.f - 1) / L.f + 2;
     return std::min(px, n);
   };
-  P_ = log2floor(pixExtent(needs.maxExtentX, rw_));
-  Q_ = log2floor(pixExtent(needs.maxExtentY, rh_));
+  L.P = log2floor(pixExtent(needs.maxExtentX, L.rw));
+  L.Q = log2floor(pixExtent(needs.maxExtentY, L.rh));
 
-  // Layer table and storage.
-  layers_.resize(size_t(P_ + 1) * (Q_ + 1));
-  size_t total = 0;
-  for (int p = 0; p <= P_; ++p)
-    for (int q = 0; q <= Q_; ++q) {
-      Layer& L = layers_[size_t(p) * (Q_ + 1) + q];
-      L.shiftX = std::max(p - c_, 0);
-      L.shiftY = std::max(q - c_, 0);
-      L.nx = entries(rw_, p, L.shiftX, wrap_);
-      L.ny = entries(rh_, q, L.shiftY, wrap_);
-      L.offset = uint32_t(total);
-      total += size_t(L.nx) * L.ny;
+  L.layers.resize(size_t(L.P + 1) * (L.Q + 1));
+  for (int p = 0; p <= L.P; ++p)
+    for (int q = 0; q <= L.Q; ++q) {
+      Layer& e = L.layers[size_t(p) * (L.Q + 1) + q];
+      e.shiftX = std::max(p - L.c, 0);
+      e.shiftY = std::max(q - L.c, 0);
+      e.nx = entries(L.rw, p, e.shiftX, L.wrap);
+      e.ny = entries(L.rh, q, e.shiftY, L.wrap);
+      e.offset = uint32_t(L.entries);
+      L.entries += size_t(e.nx) * e.ny;
     }
+  return L;
+}
+
+void Rmip::checkMemory(const HeightMap& m, const QueryNeeds& needs, const Options& o) {
+  const int W = m.width(), H = m.height();
+  const Layout L = layout(W, H, needs, o);
+  if (fitsInMemory(L.buildBytes())) return;
+  // Alternatives that fit, each with what it would need: the largest lower resolution
+  // (halving the pixels per axis), compression 0, the min-max mipmap.
+  std::vector<std::string> alt;
+  for (int f = L.f * 2; f < 2 * std::max(W, H); f *= 2) {
+    Options lower = o;
+    lower.resolution = (std::max(W, H) + f - 1) / f;
+    const size_t b = layout(W, H, needs, lower).buildBytes();
+    if (fitsInMemory(b)) {
+      alt.push_back(fmt::format("\"resolution\": {} ({})", lower.resolution, humanBytes(b)));
+      break;
+    }
+  }
+  if (o.compression > 0) {
+    Options c0 = o;
+    c0.compression = 0;
+    const size_t b = layout(W, H, needs, c0).buildBytes();
+    if (fitsInMemory(b)) alt.push_back(fmt::format("\"compression\": 0 ({})", humanBytes(b)));
+  }
+  std::string hint;
+  for (size_t i = 0; i < alt.size(); ++i) hint += (i ? " or " : "try ") + alt[i];
+  if (!alt.empty()) hint += " in \"strategies\": {\"range\": {...}}";
+  const size_t mm = MinMaxMipmap::layout(W, H, needs).bytes();
+  if (fitsInMemory(mm)) hint += fmt::format("{}--range minmax_mipmap ({})", alt.empty() ? "try " : ", or ", humanBytes(mm));
+  if (hint.empty()) hint = "no range query fits: free memory or use a smaller map";
+  checkFits(m.name(), "rmip", L.buildBytes(), hint,
+            fmt::format("{} of layers for {}x{} pixels{}, {} more while building", humanBytes(L.bytes()), L.rw, L.rh,
+                        L.f == 1 ? "" : fmt::format(" at {} samples per pixel", L.f), humanBytes(L.scratchBytes())));
+}
+
+Rmip::Rmip(const Displacement& d, const QueryNeeds& needs, const Options& o) : RangeQueryImpl(d, needs) {
+  const HeightMap& m = map();
+  const int W = m.width(), H = m.height();
+  checkMemory(m, needs, o);
+  Layout lay = layout(W, H, needs, o);
+  f_ = lay.f, rw_ = lay.rw, rh_ = lay.rh, c_ = lay.c, P_ = lay.P, Q_ = lay.Q;
+  wrap_ = lay.wrap;
+  const size_t total = lay.entries;
   if (total > size_t(UINT32_MAX)) fail(m.name(), "rmip: {} entries exceed the 32-bit layer offsets", total);
+  layers_ = std::move(lay.layers);
   data_.resize(total);
 
   // Base pixels: min/max over each f x f block of samples (clipped to the map).

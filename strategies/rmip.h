@@ -44,6 +44,28 @@ class Rmip final : public RangeQueryImpl<Rmip> {
     int resolution = 0;  // 0 = the map's
     int compression = 1;
   };
+  struct Layer {
+    uint32_t offset;  // into data_
+    int nx, ny;       // entries per row / column
+    int shiftX, shiftY;  // corner stride = 1 << shift
+  };
+  // What the constructor builds for a W x H map (the one copy of the layout formulas):
+  // bytes() equals the built Rmip's bytes(); buildBytes() adds the scratch the build
+  // holds at the same time (row and column passes, four float pairs per pixel).
+  struct Layout {
+    int f = 1, rw = 0, rh = 0, P = 0, Q = 0, c = 0;
+    bool wrap = false;
+    std::vector<Layer> layers;  // offsets filled while they fit in 32 bits
+    size_t entries = 0;
+    size_t bytes() const { return entries * sizeof(Interval) + layers.size() * sizeof(Layer); }
+    size_t scratchBytes() const { return 4 * size_t(rw) * rh * sizeof(Interval); }
+    size_t buildBytes() const { return bytes() + scratchBytes(); }
+  };
+  static Layout layout(int W, int H, const QueryNeeds& needs, const Options& o);
+  // Throws the memory check's one-line oblong::Error when the build would not fit, with
+  // the largest lower resolution and the other strategies that would.
+  static void checkMemory(const HeightMap& m, const QueryNeeds& needs, const Options& o);
+
   Rmip(const Displacement& d, const QueryNeeds& needs, const Options& o);
 
   std::string_view name() const override { return "rmip"; }
@@ -77,12 +99,6 @@ class Rmip final : public RangeQueryImpl<Rmip> {
   }
 
  private:
-  struct Layer {
-    uint32_t offset;  // into data_
-    int nx, ny;       // entries per row / column
-    int shiftX, shiftY;  // corner stride = 1 << shift
-  };
-
   // Sample axis range -> RMIP pixel range: start in [0,n), end possibly >= n (crossing
   // the border), or the whole axis [0,n-1].
   void toPixels(int a0, int a1, int size, int n, int& s, int& e) const {

@@ -6,6 +6,8 @@
 #include "strategies/safety_zones.h"
 
 #include "core/error.h"
+#include "core/memory.h"
+#include "strategies/minmax_mipmap.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -44,9 +46,8 @@ void slide(const Interval* in, int n, int d, Interval* out, std::vector<Interval
 
 }  // namespace
 
-SafetyZones::SafetyZones(const Displacement& disp, const QueryNeeds& needs, std::vector<int> deltas)
-    : RangeQueryImpl(disp, needs), global_(map().range()) {
-  const int W = map().width(), H = map().height(), big = std::max(W, H);
+std::vector<int> SafetyZones::resolveDeltas(int W, int H, const QueryNeeds& needs, std::vector<int> deltas) {
+  const int big = std::max(W, H);
   if (deltas.empty()) {
     // Half-width a box centred on the range needs for the largest extent (clamped to the map).
     const int e = std::max(std::min(needs.maxExtentX, W), std::min(needs.maxExtentY, H));
@@ -58,11 +59,36 @@ SafetyZones::SafetyZones(const Displacement& disp, const QueryNeeds& needs, std:
   }
   std::sort(deltas.begin(), deltas.end());
   deltas.erase(std::unique(deltas.begin(), deltas.end()), deltas.end());
-  deltas_ = std::move(deltas);
+  return deltas;
+}
+
+SafetyZones::SafetyZones(const Displacement& disp, const QueryNeeds& needs, std::vector<int> deltas)
+    : RangeQueryImpl(disp, needs), global_(map().range()) {
+  const int W = map().width(), H = map().height();
+  deltas_ = resolveDeltas(W, H, needs, std::move(deltas));
+  if (const size_t need = buildBytes(W, H, deltas_.size()); !fitsInMemory(need)) {
+    // Fewer (the smallest) deltas, then the structures that need less per texel.
+    std::vector<std::string> alt;
+    for (size_t n = deltas_.size() - 1; n > 0; --n)
+      if (fitsInMemory(buildBytes(W, H, n))) {
+        std::string ds;
+        for (size_t k = 0; k < n; ++k) ds += fmt::format("{}{}", k ? ", " : "", deltas_[k]);
+        alt.push_back(fmt::format("\"deltas\": [{}] in \"strategies\": {{\"range\": {{...}}}} ({})", ds,
+                                  humanBytes(buildBytes(W, H, n))));
+        break;
+      }
+    const size_t mm = MinMaxMipmap::layout(W, H, needs).bytes();
+    if (fitsInMemory(mm)) alt.push_back(fmt::format("--range minmax_mipmap ({})", humanBytes(mm)));
+    std::string hint;
+    for (size_t i = 0; i < alt.size(); ++i) hint += (i ? " or " : "try ") + alt[i];
+    if (hint.empty()) hint = "free memory or use a smaller map";
+    checkFits(map().name(), "safety_zones", need, hint,
+              fmt::format("{} min/max maps of {}x{} texels, one more while building", deltas_.size(), W, H));
+  }
 
   const size_t plane = size_t(W) * H;
   data_.resize(deltas_.size() * plane);
-  std::vector<Interval> tmp(plane);
+  std::vector<Interval> tmp(deltas_.empty() ? 0 : plane);  // buildBytes counts it only with deltas
   for (size_t k = 0; k < deltas_.size(); ++k) {
     const int d = deltas_[k];
     Interval* dst = data_.data() + k * plane;

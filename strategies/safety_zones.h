@@ -22,6 +22,18 @@ OBLONG_STAT_COUNTER("safety_zones/GlobalFallbacks", szGlobal);
 
 class SafetyZones final : public RangeQueryImpl<SafetyZones> {
  public:
+  // The deltas the constructor builds (empty: the default set for `needs`), sorted,
+  // without repeats; the one copy of that rule.
+  static std::vector<int> resolveDeltas(int W, int H, const QueryNeeds& needs, std::vector<int> deltas);
+  // bytes(): equals the built structure's bytes() for resolved deltas; buildBytes() adds
+  // the W x H scratch plane of the row pass.
+  static size_t bytes(int W, int H, size_t deltas) {
+    return deltas * size_t(W) * H * sizeof(Interval) + deltas * sizeof(int);
+  }
+  static size_t buildBytes(int W, int H, size_t deltas) {
+    return bytes(W, H, deltas) + (deltas ? size_t(W) * H * sizeof(Interval) : 0);
+  }
+
   // Empty deltas: the default set for `needs`.
   SafetyZones(const Displacement& d, const QueryNeeds& needs, std::vector<int> deltas);
 

@@ -9,11 +9,15 @@
 
 #include <catch2/catch.hpp>
 #include <fmt/core.h>
+#include <nlohmann/json.hpp>
 
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -129,6 +133,30 @@ fs::path makeFixtures() {
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   test::writeGray((dir / "nan.exr").string(), 2, 2, {0, 1, nan, 0.5f}, OIIO::TypeDesc::FLOAT);
   test::writeGray((dir / "inf.tif").string(), 2, 2, {0, 1, 0.5f, -inf}, OIIO::TypeDesc::FLOAT);
+  {  // PLY files cut short, and a header claiming far more than its file holds
+    std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                      "property float z\nproperty float s\nproperty float t\nelement face 2\n"
+                      "property list uchar int vertex_indices\nend_header\n";
+    const float v[15] = {0, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+    const int32_t f[6] = {0, 1, 2, 0, 2, 1};
+    bin.append(reinterpret_cast<const char*>(v), sizeof v);
+    for (int k = 0; k < 2; ++k) bin.append("\3").append(reinterpret_cast<const char*>(f + 3 * k), 12);
+    write(dir / "cut.ply", bin.substr(0, bin.size() - 1));  // `head -c -1`: assimp crashed
+    write(dir / "cut_ascii.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                                 "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n");  // the last face cut off
+    std::string claims = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+                         "property float y\nproperty float z\nend_header\n";
+    write(dir / "claims.ply", claims + std::string(200 - claims.size(), '\0'));
+  }
+  {  // a 1x1 PNG whose header claims 16384x16384 (OpenImageIO allocated 1.1 GiB)
+    test::writeGray((dir / "one.png").string(), 1, 1, {0.5f}, OIIO::TypeDesc::UINT8);
+    std::string png = slurp(dir / "one.png");
+    const auto be32 = [](uint32_t x) { return std::string{char(x >> 24), char(x >> 16), char(x >> 8), char(x)}; };
+    png.replace(16, 8, be32(16384) + be32(16384));
+    png.replace(29, 4, be32(test::crc32(png.substr(12, 17))));
+    write(dir / "huge.png", png);
+  }
   fs::create_directories(dir / "folder.png");
   fs::create_directories(dir / "folder.obj");
   if (!fs::exists(dir / "fifo.png")) ::mkfifo((dir / "fifo.png").c_str(), 0600);
@@ -234,6 +262,25 @@ TEST_CASE("bad input: one clear error line from the loader and from the command 
        {P + "inf.tif: non-finite height at texel (1, 1)"}},
       {"heights overflowing a float", displaced("quad.obj", R"("map": "map.png", "scale": 3e38, "bias": 3e38)"),
        {"meshes[0].displacement.scale", "overflow"}},
+      {"binary PLY one byte short (assimp crashed)", meshWith(R"({"file": "cut.ply"})"),
+       {P + "cut.ply: cannot load mesh (PLY header declares 2 face elements but the file ends after 1 of them"}},
+      {"ASCII PLY cut short (assimp loaded part of it)", meshWith(R"({"file": "cut_ascii.ply"})"),
+       {P + "cut_ascii.ply: cannot load mesh (PLY header declares 2 face elements but the file ends after 1"}},
+      {"PLY header claiming 4e9 vertices (assimp tried 48 GB)", meshWith(R"({"file": "claims.ply"})"),
+       {P + "claims.ply: cannot load mesh (PLY header declares 4000000000 vertex elements of 12 bytes"}},
+      {"map header claiming 16384x16384 pixels (1.1 GiB allocated)", displaced("quad.obj", R"("map": "huge.png")"),
+       {"meshes[0].displacement.map", P + "huge.png: header claims 16384x16384 pixels", "can hold"}},
+      {"duplicate key", R"({"meshes": [{"file": "quad.obj"}], "camera": {"fov": 30, "fov": 40}})",
+       {"duplicate key 'camera.fov'"}},
+      {"camera beyond the coordinate range (Embree aborted)",
+       R"({"meshes": [{"file": "quad.obj"}], "camera": {"from": [0, 5e18, 5e18]}})",
+       {"camera.from", "beyond the supported coordinate range"}},
+      {"mesh beyond the coordinate range", meshWith(R"({"file": "quad.obj", "transform": {"translate": [0, 0, 2e12]}})"),
+       {P + "quad.obj: vertex", "beyond the supported coordinate range"}},
+      {"displaced points beyond the coordinate range", displaced("quad.obj", R"("map": "map.png", "scale": 1e20)"),
+       {"meshes[0].displacement.scale", "displaced points reach", "2^40"}},
+      {"unknown normals option", meshWith(R"({"file": "quad.obj", "normals": "flat"})"),
+       {"meshes[0].normals: must be \"file\" or \"smooth\""}},
   };
   // One pass over the cases, setup done once: sections would re-run the whole test case
   // (fixtures and all) per case. The command lines run concurrently, checked after.
@@ -370,4 +417,266 @@ TEST_CASE("bad input: mutated scene files never crash the loader", "[bad_input]"
   }
   CHECK(loaded + rejected == 300);
   CHECK(rejected > 0);
+}
+
+// ---------------------------------------------------------------------------------------
+// The command line itself: ray files, flags, outputs, interruption.
+
+namespace {
+
+std::string rayFile(const fs::path& dir, const std::string& name, const std::string& rayLine) {
+  const fs::path p = dir / name;
+  write(p, "ox,oy,oz,dx,dy,dz,tmin,tmax\n" + rayLine + "\n");
+  return p.string();
+}
+
+// Temporary outputs (render/output.h) left in a folder: there must be none.
+size_t leftovers(const fs::path& dir) {
+  size_t n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += e.path().filename().string().find(".oblong-") != std::string::npos;
+  return n;
+}
+
+void checkOneLineError(const Run& r, const std::string& args, const std::vector<std::string>& expect) {
+  INFO(args << "\nstdout: " << r.out << "\nstderr: " << r.err);
+  CHECK(r.status == 1);
+  CHECK(lines(r.err) == 1);
+  CHECK(r.err.rfind("oblong: ", 0) == 0);
+  for (const auto& s : expect) CHECK_THAT(r.err, Contains(s));
+}
+
+}  // namespace
+
+TEST_CASE("bad input: ray files that block, never end, or hold rays the traversal cannot take", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_rays");
+  const std::string fifo = (dir / "rays.bin").string();
+  if (!fs::exists(fifo)) ::mkfifo(fifo.c_str(), 0600);
+  const std::string hits = (dir / "hits.csv").string();
+  struct C {
+    std::string rays;
+    std::vector<std::string> expect;
+  };
+  const C cases[] = {
+      {fifo, {fifo + ": not a regular file"}},                  // would block forever
+      {"/dev/zero", {"/dev/zero: not a regular file"}},           // would read forever
+      {rayFile(dir, "tmin.csv", "0,0,5,0,0,-1,-1e-6,inf"), {"line 2", "tmin must be >= 0"}},
+      {rayFile(dir, "far.csv", "0,2e18,5,0,0,-1,0,inf"), {"line 2", "coordinate limit"}},
+      {rayFile(dir, "bigdir.csv", "0,0,5,0,2e18,-1,0,inf"), {"line 2", "normalisable"}},
+      {rayFile(dir, "tinydir.csv", "0,0,5,0,0,-1e-21,0,inf"), {"line 2", "normalisable"}},
+  };
+  for (const C& c : cases) {
+    const std::string args = "trace --rays " + c.rays + " -o " + hits;
+    checkOneLineError(runCli(args), args, c.expect);
+  }
+  CHECK(!fs::exists(hits));
+}
+
+TEST_CASE("bad input: flags whose work or memory has no bound are refused before any work", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_flags");
+  const std::string png = (dir / "x.png").string(), rays = rayFile(dir, "r.csv", "0,0,5,0,0,-1,0,inf");
+  struct C {
+    std::string args;
+    std::vector<std::string> expect;
+  };
+  const C cases[] = {
+      {"render --size 99999x99999 -o " + png, {"--size", "2^26"}},
+      {"render --size 16384x16384 -o " + png, {"--size", "2^26"}},
+      {"render --marching-scale 1e-30 -o " + png, {"--marching-scale", ">= 0.015625"}},
+      {"trace --rays " + rays + " -o " + (dir / "h.csv").string() + " --baseline fixedstep --step 1e-30",
+       {"--step", "smallest texel"}},
+      {"render --seed -1 -o " + png, {"--seed", "[0, 2^64)"}},
+      {"render --seed 18446744073709551616 -o " + png, {"--seed", "[0, 2^64)"}},
+      {"render --spp -o " + png, {"command line"}},               // a parse error: one line, exit 1
+      {"render --no-such-flag -o " + png, {"command line", "--no-such-flag"}},
+      {"render --progress sometimes -o " + png, {"--progress", "sometimes"}},
+      {"render --aovs " + (dir / "a.png").string() + " -o " + png, {"a.png", ".exr"}},
+      {"render -o " + (dir / "x.xyz").string(), {"x.xyz", "no image format"}},
+  };
+  for (const C& c : cases) checkOneLineError(runCli(c.args), c.args, c.expect);
+  CHECK(!fs::exists(png));
+  // The largest seed is a seed.
+  const Run ok = runCli("render --size 4x4 -q --seed 18446744073709551615 -o " + png);
+  CHECK(ok.status == 0);
+}
+
+TEST_CASE("bad input: every output path is checked before any work", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_outputs");
+  const std::string png = (dir / "ok.png").string();
+  fs::create_directories(dir / "adir");
+  const std::string rays = rayFile(dir, "r.csv", "0,0,5,0,0,-1,0,inf");
+  struct C {
+    std::string args;
+    std::vector<std::string> expect;
+  };
+  const C cases[] = {
+      {"render -o " + png + " --stats /nonexistent/dir/s.json", {"/nonexistent/dir/s.json", "does not exist"}},
+      {"render -o " + png + " --heatmap /nonexistent/h.png", {"/nonexistent/h.png", "does not exist"}},
+      {"render -o " + png + " --aovs /nonexistent/a.exr", {"/nonexistent/a.exr", "does not exist"}},
+      {"render -o " + (dir / "adir").string(), {"adir", "is a directory"}},
+      {"render -o " + png + " --stats " + png, {"same file"}},
+      {"trace --rays " + rays + " -o /nonexistent/h.csv", {"/nonexistent/h.csv", "does not exist"}},
+      {"trace --rays " + rays + " -o " + (dir / "h.csv").string() + " --stats " + (dir / "adir").string(),
+       {"adir", "is a directory"}},
+  };
+  for (const C& c : cases) checkOneLineError(runCli(c.args), c.args, c.expect);
+  CHECK(!fs::exists(png));  // nothing rendered before the error
+  CHECK(!fs::exists(dir / "h.csv"));
+}
+
+TEST_CASE("bad input: a full device is an error, and no truncated file is left", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_full");
+  const fs::path full = dir / "full.png";
+  fs::remove(full);
+  fs::create_symlink("/dev/full", full);
+  const std::string ok = (dir / "ok.png").string();
+  const std::string rays = rayFile(dir, "r.csv", "0,0,5,0,0,-1,0,inf");
+  const std::string cases[] = {
+      "render --size 8x8 -q -o " + full.string(),
+      "render --size 8x8 -q -o " + ok + " --stats /dev/full",
+      "render --size 8x8 -q -o " + ok + " --heatmap " + full.string(),
+      "trace --rays " + rays + " -o /dev/full",
+  };
+  for (const std::string& args : cases) {
+    fs::remove(ok);
+    checkOneLineError(runCli(args), args, {"write failed"});
+  }
+  CHECK(fs::is_symlink(full));  // written through, not replaced
+  CHECK(fs::read_symlink(full) == "/dev/full");
+  CHECK(leftovers(dir) == 0);
+  CHECK(leftovers(fs::temp_directory_path()) == 0);
+}
+
+TEST_CASE("outputs: PFM, default names said, statistics of the run", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("cli_outputs");
+  // .pfm is documented; OpenImageIO cannot write it, oblong does.
+  const std::string pfm = (dir / "x.pfm").string(), stats = (dir / "s.json").string();
+  Run r = runCli("render --size 8x6 -q --integrator primary -o " + pfm + " --stats " + stats);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  CHECK(fs::file_size(pfm) == std::string("PF\n8 6\n-1.0\n").size() + 8 * 6 * 12);
+  auto in = OIIO::ImageInput::open(pfm);
+  REQUIRE(in);
+  CHECK(in->spec().width == 8);
+  CHECK(in->spec().nchannels == 3);
+  in->close();
+  std::ifstream f(stats);
+  const auto j = nlohmann::json::parse(f);
+  CHECK(j.at("version").get<std::string>().size() > 0);
+  CHECK(j.at("peak_memory").get<int64_t>() > 1 << 20);
+  CHECK(j.at("seconds").at("load").get<double>() >= 0);
+  CHECK(j.at("seconds").at("total").get<double>() >= j.at("seconds").at("render").get<double>());
+  CHECK(j.at("threads").at("used").get<int>() >= 1);
+  CHECK(j.at("partial") == false);
+  CHECK(leftovers(dir) == 0);
+  // A scene without a displaced mesh still names its geometry.
+  const std::string plain = (dir / "plain.json").string(), plainStats = (dir / "plain.json.stats").string();
+  write(plain, R"({"meshes": [{"shape": {"type": "plane", "size": 2}}]})");
+  r = runCli("render " + plain + " --size 8x8 -q -o " + (dir / "p.png").string() + " --stats " + plainStats);
+  REQUIRE(r.status == 0);
+  std::ifstream pf(plainStats);
+  CHECK_THAT(nlohmann::json::parse(pf).at("geometry").get<std::string>(), Contains("embree triangles"));
+  // Without -o the summary says where the image went.
+  r = runCli("render --size 4x4 -q -o " + (dir / "named.png").string());
+  CHECK_THAT(r.out, !Contains("default name"));
+  const std::string cmd = "cd " + dir.string() + " && " + std::string(OBLONG_BINARY) + " render --size 4x4 -q > out.txt";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  CHECK_THAT(slurp(dir / "out.txt"), Contains("oblong.png (the default name; -o chooses)"));
+  CHECK(fs::exists(dir / "oblong.png"));
+  // --help shows the defaults.
+  r = runCli("render --help");
+  CHECK(r.status == 0);
+  CHECK_THAT(r.out, Contains("oblong.png"));
+  CHECK_THAT(r.out, Contains("path"));
+}
+
+TEST_CASE("bad input: far-away prisms are traced box-only, and render says so", "[bad_input][cli]") {
+  const fs::path dir = fixtures();
+  const std::string scene = (dir / "far.json").string();
+  write(scene, R"({"meshes": [{"shape": {"type": "plane", "size": 1},
+                   "displacement": {"map": "map.png", "scale": 0.01},
+                   "transform": {"translate": [1e6, 0, 0]}}]})");
+  const std::string rays = rayFile(test::scratchDir("bad_input_far"), "r.csv", "1000000,1,0,0,-1,0,0,inf");
+  const Run r = runCli("trace " + scene + " --rays " + rays + " -o " + (dir / "far_hits.csv").string());
+  INFO(r.out << r.err);
+  CHECK(r.status == 0);
+  CHECK(lines(r.err) == 1);
+  CHECK_THAT(r.err, Contains("oblong: warning: " + scene + ": meshes[0]: 2 of 2 prisms are box-only"));
+}
+
+TEST_CASE("Ctrl-C during render writes what was rendered, marked partial, and exits 130", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("cli_interrupt");
+  const std::string png = (dir / "partial.png").string(), stats = (dir / "partial.json").string(),
+                    err = (dir / "err.txt").string();
+  fs::remove(png);
+  // --progress always logs the phases to a file: the signal goes in once rendering runs.
+  const std::string cmd = std::string(OBLONG_BINARY) + " render --size 640x480 --spp 256 --threads 1 --progress always -o " +
+                          png + " --stats " + stats + " > /dev/null 2> " + err;
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), (char*)nullptr);
+    ::_exit(127);
+  }
+  bool rendering = false;
+  for (int i = 0; i < 600 && !rendering; ++i) {  // up to 60 s for loading and building
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    rendering = slurp(err).find("rendering 640x480") != std::string::npos;
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ::kill(pid, SIGINT);
+  int raw = 0;
+  ::waitpid(pid, &raw, 0);
+  INFO(slurp(err));
+  REQUIRE(rendering);
+  CHECK(WIFEXITED(raw));
+  CHECK(WEXITSTATUS(raw) == 130);
+  CHECK(fs::exists(png));
+  std::ifstream f(stats);
+  const auto j = nlohmann::json::parse(f);
+  CHECK(j.at("partial") == true);
+  CHECK(j.at("pixels").at("rendered").get<int64_t>() < 640 * 480);
+  CHECK(leftovers(dir) == 0);
+}
+
+TEST_CASE("oblong info builds each range query once", "[bad_input][cli]") {
+  // A full-resolution rmip of a 2048^2 map is ~290 MiB. Against a 64^2 map, the peak
+  // grows by the structure, the map and the build's temporaries (~1.5 x the structure);
+  // built twice (once for the prisms, once to show it) it would grow by ~2.5 x.
+  const fs::path dir = test::scratchDir("cli_info_once");
+  auto info = [&](int n) {
+    std::vector<float> v(size_t(n) * n);
+    for (size_t i = 0; i < v.size(); ++i) v[i] = float((i * 2654435761u) % 65536) / 65535.0f;
+    const std::string map = fmt::format("map{}.png", n), scene = (dir / fmt::format("s{}.json", n)).string();
+    test::writeGray((dir / map).string(), n, n, v, OIIO::TypeDesc::UINT16);
+    write(scene, R"({"meshes": [{"shape": {"type": "plane", "size": 2}, "displacement": {"map": ")" + map +
+                     R"(", "scale": 0.01}}]})");
+    const Run r = runCli("info " + scene, n);
+    INFO(r.out << r.err);
+    REQUIRE(r.status == 0);
+    auto mib = [&](const std::string& key) {  // "KEY: 290.02 MiB ..." in the output
+      const size_t at = r.out.find(key);
+      REQUIRE(at != std::string::npos);
+      const std::string rest = r.out.substr(at + key.size());
+      const double x = std::stod(rest);
+      const size_t unit = rest.find_first_of("BKMG");
+      return x * (rest[unit] == 'G' ? 1024.0 : rest[unit] == 'M' ? 1.0 : rest[unit] == 'K' ? 1 / 1024.0 : 0.0);
+    };
+    return std::pair{mib("total    : "), mib("peak     : ")};
+  };
+  const auto [smallBuilt, smallPeak] = info(64);
+  const auto [bigBuilt, bigPeak] = info(2048);
+  INFO("built " << smallBuilt << " / " << bigBuilt << " MiB, peak " << smallPeak << " / " << bigPeak << " MiB");
+  CHECK(bigBuilt > 200);
+  CHECK(bigPeak - smallPeak < 2.0 * (bigBuilt - smallBuilt));
+}
+
+TEST_CASE("bad input: an image that does not fit in memory is refused before any work", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_image_memory");
+  const std::string png = (dir / "big.png").string();
+  const std::string args = "render --size 8192x8192 -o " + png;
+  ::setenv("OBLONG_MEMORY_LIMIT", "100M", 1);
+  const Run r = runCli(args);
+  ::unsetenv("OBLONG_MEMORY_LIMIT");
+  checkOneLineError(r, args, {"--size: rendering at this size needs", "smaller --size"});
+  CHECK(!fs::exists(png));
 }

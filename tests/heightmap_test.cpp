@@ -6,6 +6,9 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 
 using namespace oblong;
@@ -125,4 +128,75 @@ TEST_CASE("procedural default map is tileable and in [0,1]", "[heightmap]") {
     border = std::max(border, std::abs(m.at(0, j) - m.at(m.width() - 1, j)));
   }
   CHECK(border <= inner + 1e-6f);
+}
+
+namespace {
+// A grey+alpha or grey image whose file holds exactly these values (unassociated alpha).
+void writeGreyAlpha(const std::string& path, int channels, OIIO::TypeDesc type, const std::vector<float>& px) {
+  auto out = OIIO::ImageOutput::create(path);
+  REQUIRE(out);
+  OIIO::ImageSpec spec(2, 2, channels, type);
+  if (channels == 2) spec.alpha_channel = 1;
+  spec.attribute("oiio:UnassociatedAlpha", 1);  // the values are as stored, not premultiplied
+  REQUIRE(out->open(path, spec));
+  REQUIRE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+  out->close();
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+std::string be32(uint32_t v) {
+  return {char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+}
+}  // namespace
+
+TEST_CASE("heights of a grey+alpha map are the grey values, not multiplied by alpha", "[heightmap]") {
+  const auto dir = test::scratchDir("heightmap_alpha");
+  const std::vector<float> grey = {0.6f, 0.2f, 1.0f, 0.4f};
+  for (const char* ext : {"png", "tif"})
+    for (const OIIO::TypeDesc type : {OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT16})
+      for (const int channels : {1, 2}) {
+        std::vector<float> px;
+        for (float g : grey) {
+          px.push_back(g);
+          if (channels == 2) px.push_back(0.5f);  // OpenImageIO's default read gave g * 0.5
+        }
+        const std::string path =
+            (dir / fmt::format("g{}_{}.{}", channels, type == OIIO::TypeDesc::UINT8 ? 8 : 16, ext)).string();
+        writeGreyAlpha(path, channels, type, px);
+        INFO(path);
+        const HeightMap m = HeightMap::load(path);
+        const float tol = type == OIIO::TypeDesc::UINT8 ? 0.501f / 255 : 0.501f / 65535;
+        for (int k = 0; k < 4; ++k) CHECK(std::abs(m.atUnchecked(k % 2, k / 2) - grey[size_t(k)]) <= tol);
+      }
+}
+
+TEST_CASE("a header claiming more pixels than the file can hold is refused before allocating", "[heightmap]") {
+  const auto dir = test::scratchDir("heightmap_claims");
+  // A valid 1x1 PNG, its IHDR patched to 16384x16384 (CRC fixed): 67 bytes that
+  // OpenImageIO read into a 1.1 GiB buffer before it failed.
+  const std::string one = (dir / "one.png").string();
+  test::writeGray(one, 1, 1, {0.5f}, OIIO::TypeDesc::UINT8);
+  std::string png = slurp(one);
+  REQUIRE(png.compare(12, 4, "IHDR") == 0);
+  png.replace(16, 8, be32(16384) + be32(16384));
+  png.replace(29, 4, be32(test::crc32(png.substr(12, 17))));
+  const std::string huge = (dir / "huge.png").string();
+  std::ofstream(huge, std::ios::binary) << png;
+  CHECK_THROWS_WITH(HeightMap::load(huge),
+                    Catch::Contains(huge + ": header claims 16384x16384 pixels (at least 268435456 bytes at 8 bits per "
+                                           "sample), more than this " +
+                                    std::to_string(png.size()) + "-byte png file can hold (deflate"));
+  // Uncompressed: the pixels must be in the file.
+  const std::string pgm = (dir / "claims.pgm").string();
+  std::ofstream(pgm, std::ios::binary) << "P5\n4096 4096\n255\n" << std::string(1000, '\x7f');
+  CHECK_THROWS_WITH(HeightMap::load(pgm), Catch::Contains(pgm + ": header claims 4096x4096 pixels") &&
+                                              Catch::Contains("-byte pnm file can hold (uncompressed)"));
+  // A map that compresses about as well as deflate can still loads: 2048x2048 of one value.
+  const std::string flat = (dir / "flat.png").string();
+  test::writeGray(flat, 2048, 2048, std::vector<float>(2048 * 2048, 0.25f), OIIO::TypeDesc::UINT8);
+  INFO(std::filesystem::file_size(flat) << " bytes");
+  CHECK(HeightMap::load(flat).atUnchecked(2047, 2047) == Approx(0.25f).margin(0.5 / 255));
 }

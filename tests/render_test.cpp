@@ -29,7 +29,7 @@ TEST_CASE("render: the same seed gives the same image with 1 or 2 threads", "[re
     o.spp = 2;
     o.integrator = integ;
     o.seed = 7;
-    o.progress = false;
+    o.progress = nullptr;
     o.threads = 1;
     const RenderResult a = render(s, defaultAccel(), o);
     o.threads = 2;
@@ -49,7 +49,7 @@ TEST_CASE("render: AOVs go to one multi-channel EXR, steps to a heat map", "[ren
   RenderOptions o;
   o.size = {40, 30};
   o.integrator = Integrator::Primary;
-  o.progress = false;
+  o.progress = nullptr;
   const RenderResult r = render(s, defaultAccel(), o);
   // Primary: colour is the shading normal, 0.5 n + 0.5, on every hit pixel.
   size_t hitPixels = 0, traversed = 0;
@@ -115,7 +115,7 @@ RenderResult renderNormals(const Scene& s, ShadingNormals n) {
   o.size = {40, 30};
   o.integrator = Integrator::Primary;
   o.normals = n;
-  o.progress = false;
+  o.progress = nullptr;
   return render(s, accel, o);
 }
 

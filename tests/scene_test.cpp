@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <tuple>
 
 using namespace oblong;
 using Catch::Matchers::Contains;
@@ -317,6 +318,27 @@ TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
        {"strategies.range.name", "non-empty string"}},
       {"strategy name not a string", "{" + mesh + R"(, "strategies": {"range": {"name": 3}}})",
        {"strategies.range.name"}},
+      {"duplicate top-level key", "{" + mesh + ", " + mesh + "}", {"duplicate key 'meshes'"}},
+      {"duplicate key in a mesh's displacement",
+       R"({"meshes": [{"file": "quad.obj"}, {"file": "quad.obj", "displacement": {"map": "map.png", "scale": 1, "scale": 2}}]})",
+       {"duplicate key 'meshes[1].displacement.scale'"}},
+      {"duplicate key in a light", "{" + mesh + R"(, "lights": [{"type": "point", "position": [0,0,0]},
+         {"type": "point", "position": [1,1,1], "intensity": 1, "intensity": 2}]})",
+       {"duplicate key 'lights[1].intensity'"}},
+      {"duplicate strategy parameter", "{" + mesh + R"(, "strategies": {"range": {"name": "rmip", "resolution": 8, "resolution": 16}}})",
+       {"duplicate key 'strategies.range.resolution'"}},
+      {"normals neither file nor smooth", R"({"meshes": [{"file": "quad.obj", "normals": "flat"}]})",
+       {"meshes[0].normals", "must be \"file\" or \"smooth\", got \"flat\""}},
+      {"camera beyond the coordinate range", "{" + mesh + R"(, "camera": {"from": [0, 5e18, 5e18]}})",
+       {"camera.from: [0, 5e+18, 5e+18] lies beyond the supported coordinate range"}},
+      {"look-at point beyond the coordinate range", "{" + mesh + R"(, "camera": {"to": [2e12, 0, 0]}})",
+       {"camera.to", "coordinate range"}},
+      {"mesh beyond the coordinate range after the transform",
+       R"({"meshes": [{"file": "quad.obj", "transform": {"translate": [0, 0, 3e12]}}]})",
+       {"meshes[0].file", "after the transform lies beyond the supported coordinate range"}},
+      {"displaced points beyond the coordinate range", disp + R"("scale": 2e12}}]})",
+       {"meshes[0].displacement.scale", "displaced points reach 2e+12", "map.png", "scale 2000000000000",
+        "beyond the supported coordinate range 2^40"}},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.name) {
@@ -334,6 +356,42 @@ TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
       }
     }
   }
+}
+
+TEST_CASE("normals: \"smooth\" replaces the file's normals, \"file\" keeps them", "[scene]") {
+  const fs::path dir = sceneDir();
+  // Two faces at a right angle, each with its own normal: split vertices on the edge.
+  std::ofstream(dir / "fold.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                     "vn 0 0 1\nvn 0 1 0\nf 1/1/1 2/2/1 3/3/1\nf 1/1/2 4/3/2 2/2/2\n";
+  const Scene s = loadScene(writeScene(dir / "normals.json", R"({"meshes": [
+    {"file": "fold.obj", "displacement": {"map": "map.png"}},
+    {"file": "fold.obj", "normals": "file", "displacement": {"map": "map.png"}},
+    {"file": "fold.obj", "normals": "smooth", "displacement": {"map": "map.png"}}]})"));
+  REQUIRE(s.meshes.size() == 3);
+  CHECK(s.meshes[0].mesh.normals == s.meshes[1].mesh.normals);  // "file" is the default
+  for (int k = 0; k < 2; ++k) {
+    const Mesh& m = s.meshes[size_t(k) + 1].mesh;
+    std::map<std::tuple<float, float, float>, std::set<std::tuple<float, float, float>>> byPosition;
+    for (size_t v = 0; v < m.positions.size(); ++v)
+      byPosition[{m.positions[v].x, m.positions[v].y, m.positions[v].z}].insert(
+          {m.normals[v].x, m.normals[v].y, m.normals[v].z});
+    const auto& edge = byPosition.at({0.0f, 0.0f, 0.0f});
+    CHECK(edge.size() == (k == 0 ? 2u : 1u));  // the file's two normals, or one shared one
+  }
+}
+
+TEST_CASE("a map with huge heights is refused naming the map, the scale and the limit", "[scene]") {
+  const fs::path dir = sceneDir();
+  // A texel of 1e20: its spike overflowed the traversal's float products.
+  test::writeGray((dir / "spike.tif").string(), 2, 2, {0, 0, 1e20f, 0}, OIIO::TypeDesc::FLOAT);
+  const std::string path =
+      writeScene(dir / "spike.json", R"({"meshes": [{"file": "quad.obj", "displacement": {"map": "spike.tif"}}]})");
+  CHECK_THROWS_WITH(loadScene(path), Contains(path + ": meshes[0].displacement.scale: displaced points reach 1e+20") &&
+                                         Contains((dir / "spike.tif").string() + " with H in [0, 1e+20], scale 1") &&
+                                         Contains("beyond the supported coordinate range 2^40 = 1.1e+12"));
+  // Within the limit: loads.
+  CHECK_NOTHROW(loadScene(writeScene(
+      dir / "tall.json", R"({"meshes": [{"file": "quad.obj", "displacement": {"map": "map.png", "scale": 1e12}}]})")));
 }
 
 TEST_CASE("missing scene file and non-finite numbers built in code", "[scene]") {

@@ -6,6 +6,7 @@
 
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -25,6 +26,32 @@ inline void writeGray(const std::string& path, int w, int h, const std::vector<f
   out->open(path, spec);
   out->write_image(OIIO::TypeDesc::FLOAT, v.data());
   out->close();
+}
+
+// Base64 (RFC 4648, with padding): data URIs of glTF buffers.
+inline std::string base64(const std::string& bytes) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t v = uint32_t((unsigned char)bytes[i]) << 16;
+    if (i + 1 < bytes.size()) v |= uint32_t((unsigned char)bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) v |= uint32_t((unsigned char)bytes[i + 2]);
+    out += k[(v >> 18) & 63];
+    out += k[(v >> 12) & 63];
+    out += i + 1 < bytes.size() ? k[(v >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? k[v & 63] : '=';
+  }
+  return out;
+}
+
+// CRC-32 as PNG chunks use it (ISO 3309, reflected, polynomial 0xEDB88320).
+inline uint32_t crc32(const std::string& bytes) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (unsigned char b : bytes) {
+    c ^= b;
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+  }
+  return c ^ 0xFFFFFFFFu;
 }
 
 }  // namespace oblong::test

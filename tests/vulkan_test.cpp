@@ -203,7 +203,7 @@ TEST_CASE("vulkan: the asteroid renders as on the CPU", "[vulkan]") {
     o.integrator = integ;
     o.spp = integ == Integrator::Primary ? 2 : 1;
     o.normals = integ == Integrator::AO ? ShadingNormals::Smooth : ShadingNormals::Micro;
-    o.progress = false;
+    o.progress = nullptr;
     const RenderResult a = render(s, cpu, o);
     const RenderResult b = vk::render(s, gpu, o);
     size_t differ = 0;

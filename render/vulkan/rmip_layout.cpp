@@ -4,6 +4,7 @@
 #include "render/vulkan/rmip_layout.h"
 
 #include "core/error.h"
+#include "strategies/rmip.h"
 
 #include <tbb/parallel_for.h>
 
@@ -31,6 +32,10 @@ void parallelRows(int n, F&& f) {
 }  // namespace
 
 RmipLayout RmipLayout::build(const HeightMap& m, const QueryNeeds& needs, int resolution, int compression) {
+  Rmip::Options opts;
+  opts.resolution = resolution;
+  opts.compression = compression;
+  Rmip::checkMemory(m, needs, opts);  // the same layers and scratch as the CPU build
   RmipLayout L;
   const int W = m.width(), H = m.height();
   const int f = resolution <= 0 ? 1 : std::max(1, (std::max(W, H) + resolution - 1) / resolution);

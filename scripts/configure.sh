@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Configures a build folder for one purpose; every option a purpose needs is set
+# explicitly, so that a folder configured for another purpose before (the demo's
+# test-less build, say) is switched over instead of silently reused.
+#   scripts/configure.sh demo|release|asan BUILD_DIR
+set -euo pipefail
+cd "$(dirname "$0")/.."
+purpose="${1:?usage: scripts/configure.sh demo|release|asan BUILD_DIR}"
+dir="${2:?usage: scripts/configure.sh demo|release|asan BUILD_DIR}"
+case "$purpose" in
+  demo)    opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=OFF -DOBLONG_BUILD_BENCHMARKS=OFF) ;;
+  release) opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=ON) ;;
+  # Sanitizer build: unit tests only (benchmarks off), statistics on.
+  asan)    opts=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DOBLONG_SANITIZE=ON -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=OFF) ;;
+  *) echo "scripts/configure.sh: unknown purpose '$purpose' (demo | release | asan)" >&2; exit 1 ;;
+esac
+cmake -S . -B "$dir" -G Ninja -DOBLONG_STATS=ON "${opts[@]}"
