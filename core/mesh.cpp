@@ -869,7 +869,8 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
     std::string err = importer.GetErrorString();
     // ReadFileFromMemory names the copy AI_MEMORYIO_MAGIC_FILENAME + ".ply".
     const std::string_view copyName = "$$$___magic___$$$.ply";
-    for (size_t at; ply.patch && (at = err.find(copyName)) != std::string::npos;) err.replace(at, copyName.size(), "the file");
+    for (size_t at; ply.patch && (at = err.find(copyName)) != std::string::npos;)
+      err.replace(at, copyName.size(), "the file");
     // One line: assimp's messages sometimes end with a newline.
     std::replace(err.begin(), err.end(), '\n', ' ');
     while (!err.empty() && err.back() == ' ') err.pop_back();

@@ -153,7 +153,7 @@ const json& array(const Reader& r, const std::string& k) {
 ivec2 parseImage(const Reader& r) {
   r.allowOnly({"width", "height"});
   const ivec2 size{r.positiveInt("width", 640), r.positiveInt("height", 480)};
-  if (int64_t(size.x) * size.y > (int64_t(1) << 26))
+  if (int64_t(size.x) * size.y > kMaxImagePixels)
     r.error("{}x{} pixels is more than the supported 2^26 (8192x8192)", size.x, size.y);
   return size;
 }
@@ -469,7 +469,9 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
     parseStrategy(st, "inverter", s.inverter);
     parseStrategy(st, "splitter", s.splitter);
     s.marchingScale = st.number("marching_scale", s.marchingScale);
-    if (!(s.marchingScale > 0.0f)) st.errorAt("marching_scale", "must be positive (texels), got {}", s.marchingScale);
+    if (!(s.marchingScale >= kMinMarchingScale))
+      st.errorAt("marching_scale", "must be positive (texels) and >= {} (smaller only multiplies the work), got {}",
+                 kMinMarchingScale, s.marchingScale);
     s.inversionInTraversal = st.boolean("inversion_in_traversal", s.inversionInTraversal);
   }
   top.require("meshes");

@@ -40,6 +40,12 @@ struct StrategyChoice {
   std::string where;  // "scene.json: strategies.range" for error messages
 };
 
+// Below this the work per ray grows without bound for no gain in exactness: marching
+// rectangles smaller than a cell still tests whole cells.
+constexpr float kMinMarchingScale = 1.0f / 64.0f;  // texels
+// A scene's image (and --size): 2^26 pixels (8192 x 8192).
+constexpr int64_t kMaxImagePixels = int64_t(1) << 26;
+
 struct Scene {
   std::string path;  // file it came from ("<default>" for the built-in scene)
   std::vector<SceneMesh> meshes;

@@ -57,10 +57,8 @@ struct TriangleHit {
   vec3 ng{0.0f};  // unit geometric normal of the hit micro-triangle
 };
 
-// Below these the work per ray grows without bound for no gain in exactness: marching
-// rectangles smaller than a cell still tests whole cells, and fixed steps far below a
-// texel only multiply the inversions.
-constexpr float kMinMarchingScale = 1.0f / 64.0f;  // texels
+// Fixed steps far below a texel only multiply the inversions (kMinMarchingScale, in
+// core/scene.h, bounds the traversal's work the same way).
 constexpr float kMinFixedStepTexels = 1.0f / 64.0f;  // of the smallest texel's world size
 
 // The strategy choice for the displaced meshes of a scene (names as on the CLI).

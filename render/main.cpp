@@ -53,9 +53,6 @@ using namespace oblong;
 
 namespace {
 
-// As for a scene's image block (core/scene.cpp).
-constexpr int64_t kMaxImagePixels = int64_t(1) << 26;
-
 Scene sceneFrom(const std::string& path) { return path.empty() ? defaultScene() : loadScene(path); }
 
 // --device of render and trace: "cpu" (Embree) or "vulkan" (render/vulkan/commands.h).
@@ -569,7 +566,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
-    catchInterrupt();
+    if (deviceFlag == "cpu") catchInterrupt();  // the Vulkan passes are not tiled: Ctrl-C ends them at once
     rf.defaultOut = renderOut->count() == 0;
     if (*render) return runRender(scenePath, rf, flags);
     if (*trace) return runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, flags);

@@ -4,6 +4,7 @@
 #include "render/traversal.h"
 
 #include "core/error.h"
+#include "core/scene.h"
 #include "strategies/minmax_mipmap.h"
 #include "strategies/rmip.h"
 #include "strategies/safety_zones.h"

@@ -216,6 +216,8 @@ TEST_CASE("bad input: one clear error line from the loader and from the command 
        {"strategies.marching_scale", "positive"}},
       {"negative marching scale", R"({"meshes": [{"file": "quad.obj"}], "strategies": {"marching_scale": -1}})",
        {"strategies.marching_scale", "positive"}},
+      {"marching scale with unbounded work", R"({"meshes": [{"file": "quad.obj"}], "strategies": {"marching_scale": 1e-30}})",
+       {"strategies.marching_scale", ">= 0.015625"}},
       {"negative shape size", meshWith(R"({"shape": {"type": "plane", "size": -1}})"),
        {"meshes[0].shape.size", "positive"}},
       {"zero transform scale", meshWith(R"({"file": "quad.obj", "transform": {"scale": 0}})"),
