@@ -123,21 +123,21 @@ std::vector<Ray> readRays(const std::string& path) {
 }
 
 void writeRays(const std::string& path, const std::vector<Ray>& rays) {
+  std::string out;
   if (endsWith(path, ".bin")) {
-    std::ofstream f(path, std::ios::binary);
-    if (!f) fail(path, "cannot write ray file");
-    for (const Ray& r : rays) {
+    out.resize(rays.size() * 8 * sizeof(float));
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const Ray& r = rays[i];
       const float x[8] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax};
-      f.write(reinterpret_cast<const char*>(x), sizeof x);
+      std::memcpy(out.data() + i * sizeof x, x, sizeof x);
     }
-    return;
+  } else {
+    out = std::string(kRayHeader) + "\n";
+    for (const Ray& r : rays)
+      fmt::format_to(std::back_inserter(out), "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", r.o.x, r.o.y,
+                     r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax);
   }
-  std::ofstream f(path);
-  if (!f) fail(path, "cannot write ray file");
-  f << kRayHeader << "\n";
-  for (const Ray& r : rays)
-    f << fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", r.o.x, r.o.y, r.o.z, r.d.x, r.d.y,
-                     r.d.z, r.tmin, r.tmax);
+  writeTextOutput(path, out);
 }
 
 void writeHits(const std::string& path, const std::vector<Hit>& hits) {

@@ -3,6 +3,7 @@
 
 #include "core/error.h"
 #include "core/stats.h"
+#include "render/output.h"
 #include "render/rays_io.h"
 #include "render/vulkan/vulkan_render.h"
 #include "render/vulkan/vulkan_scene.h"
@@ -10,7 +11,6 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
-#include <fstream>
 
 namespace oblong::vk {
 
@@ -23,11 +23,7 @@ nlohmann::json deviceJson(const VulkanScene& vs) {
   return j;
 }
 
-void writeJson(const std::string& path, const nlohmann::json& j) {
-  std::ofstream f(path);
-  if (!f) fail(path, "cannot write statistics");
-  f << j.dump(2) << "\n";
-}
+void writeJson(const std::string& path, const nlohmann::json& j) { writeTextOutput(path, j.dump(2) + "\n"); }
 
 }  // namespace
 
