@@ -1,18 +1,15 @@
 // Named parameters for strategies (pbrt-style): every strategy reads its own
 // parameters with documented defaults; a parameter nobody read is an error that
-// names where it came from.
+// names where it came from. Every value read is recorded, so a strategy's resolved
+// parameters (defaults included) can be reported (--stats, oblong info).
 #pragma once
 
 #include "core/error.h"
 
 #include <nlohmann/json.hpp>
 
-#include <functional>
-#include <map>
-#include <memory>
 #include <set>
 #include <string>
-#include <vector>
 
 namespace oblong {
 
@@ -28,9 +25,14 @@ class ParamSet {
   template <typename T>
   T get(const std::string& key, const T& def) {
     used_.insert(key);
-    if (!j_.contains(key)) return def;
+    if (!j_.contains(key)) {
+      resolved_[key] = def;
+      return def;
+    }
     try {
-      return j_.at(key).get<T>();
+      T v = j_.at(key).get<T>();
+      resolved_[key] = v;
+      return v;
     } catch (const nlohmann::json::exception&) {
       fail(where_, "parameter '{}' has the wrong type ({})", key, j_.at(key).dump());
     }
@@ -44,46 +46,15 @@ class ParamSet {
   }
   // Throws for the first parameter that no strategy read.
   void checkUnused() const;
+  // Every parameter read so far with the value used (the default when it was not
+  // given): what a run actually ran with.
+  const nlohmann::json& resolved() const { return resolved_; }
 
  private:
   nlohmann::json j_;
   std::string where_;
   std::set<std::string> used_;
-};
-
-// Registry by name for one interface. Ctx carries what construction needs (e.g. the
-// displacement map); factories read their ParamSet.
-template <typename Base, typename Ctx>
-class Registry {
- public:
-  using Factory = std::function<std::unique_ptr<Base>(ParamSet&, const Ctx&)>;
-
-  static Registry& instance() {
-    static Registry r;
-    return r;
-  }
-  void add(const std::string& name, Factory f) { factories_[name] = std::move(f); }
-  bool has(const std::string& name) const { return factories_.count(name) != 0; }
-  std::vector<std::string> names() const {
-    std::vector<std::string> n;
-    for (const auto& [k, v] : factories_) n.push_back(k);
-    return n;
-  }
-  // Unknown names and unused parameters are errors naming params.where().
-  std::unique_ptr<Base> create(const std::string& name, ParamSet& params, const Ctx& ctx) const {
-    auto it = factories_.find(name);
-    if (it == factories_.end()) {
-      std::string list;
-      for (const auto& [k, v] : factories_) list += (list.empty() ? "" : ", ") + k;
-      fail(params.where(), "unknown strategy '{}' (known: {})", name, list);
-    }
-    auto obj = it->second(params, ctx);
-    params.checkUnused();
-    return obj;
-  }
-
- private:
-  std::map<std::string, Factory> factories_;
+  nlohmann::json resolved_ = nlohmann::json::object();
 };
 
 }  // namespace oblong

@@ -85,20 +85,16 @@ InversionResult CeresInverter::invertFast(const vec3& X, const DisplacedTriangle
   return {vec2(d.bary), vec2(d.uv), float(d.h), d.converged, d.iterations};
 }
 
-void registerCeresInverter() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    inverterRegistry().add("ceres", [](ParamSet& ps, const InverterContext&) -> std::unique_ptr<Inverter> {
-      CeresOptions o;
-      o.functionTolerance = ps.getInRange("function_tolerance", o.functionTolerance, 0.0, 1.0);
-      o.parameterTolerance = ps.getInRange("parameter_tolerance", o.parameterTolerance, 0.0, 1.0);
-      o.gradientTolerance = ps.getInRange("gradient_tolerance", o.gradientTolerance, 0.0, 1.0);
-      o.maxIterations = ps.getInRange("max_iterations", o.maxIterations, 1, 10000);
-      o.residualTolerance = ps.getInRange("residual_tolerance", o.residualTolerance, 0.0, 1.0);
-      o.multiStart = ps.get<bool>("multi_start", o.multiStart);
-      return std::make_unique<CeresInverter>(o);
-    });
-  });
-}
+OBLONG_REGISTER_INVERTER("ceres", [](ParamSet& ps, const InverterContext&) -> std::unique_ptr<Inverter> {
+    CeresOptions o;
+    o.functionTolerance = ps.getInRange("function_tolerance", o.functionTolerance, 0.0, 1.0);
+    o.parameterTolerance = ps.getInRange("parameter_tolerance", o.parameterTolerance, 0.0, 1.0);
+    o.gradientTolerance = ps.getInRange("gradient_tolerance", o.gradientTolerance, 0.0, 1.0);
+    o.maxIterations = ps.getInRange("max_iterations", o.maxIterations, 1, 10000);
+    o.residualTolerance = ps.getInRange("residual_tolerance", o.residualTolerance, 0.0, 1.0);
+    o.multiStart = ps.get<bool>("multi_start", o.multiStart);
+    return std::make_unique<CeresInverter>(o);
+  },
+  StrategyTraits{true, "Ceres autodiff in double with multi-start: the correctness reference (slow)"});
 
 }  // namespace oblong

@@ -21,8 +21,7 @@
 //
 // This header does not include Ceres; the solver lives in ceres.cpp, compiled into the
 // library oblong_ceres, the only target that links Ceres (DESIGN invariant 4). A program
-// linking oblong_ceres calls registerCeresInverter() once to make "ceres" known to
-// createInverter().
+// linking oblong_ceres knows "ceres" (it registers itself); others say it is not linked.
 //
 // Statistics: ceres/Inversions, ceres/Iterations, ceres/NotConverged.
 #pragma once
@@ -51,8 +50,5 @@ class CeresInverter final : public InverterImpl<CeresInverter> {
  private:
   CeresOptions o_;
 };
-
-// Adds "ceres" to inverterRegistry() (idempotent, thread-safe).
-void registerCeresInverter();
 
 }  // namespace oblong

@@ -246,6 +246,5 @@ class Cubic final : public InverterImpl<Cubic> {
   CubicOptions o_;
 };
 
-void registerCubic(InverterRegistry& r);
 
 }  // namespace oblong

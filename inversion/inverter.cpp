@@ -1,34 +1,18 @@
-// Inverter registry (see inverter.h and docs/inversion.md). Strategies are registered
-// explicitly (a self-registering static object in a static library's .cpp would be
-// dropped by the linker); "ceres" is added by registerCeresInverter() in oblong_ceres so
-// that nothing else links Ceres.
+// Inverter registry access (see inverter.h and docs/inversion.md). The strategies
+// register themselves; "ceres" lives in oblong_ceres, so only programs linking that
+// library (and so Ceres) know it.
 #include "inversion/inverter.h"
 
 #include "core/error.h"
-#include "inversion/cubic.h"
-#include "inversion/newton.h"
 
-#include <mutex>
 
 namespace oblong {
 
-InverterRegistry& inverterRegistry() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    auto& r = InverterRegistry::instance();
-    registerNewton(r);
-    registerCubic(r);
-  });
-  return InverterRegistry::instance();
-}
-
 std::unique_ptr<Inverter> createInverter(const std::string& name, ParamSet& params,
                                          const InverterContext& ctx) {
-  auto& r = inverterRegistry();
+  auto& r = InverterRegistry::instance();
   if (name == "ceres" && !r.has("ceres"))
-    fail(params.where(),
-         "inverter 'ceres' is not linked into this program (link oblong_ceres and call "
-         "registerCeresInverter())");
+    fail(params.where(), "inverter 'ceres' is not linked into this program (link oblong_ceres)");
   return r.create(name, params, ctx);
 }
 
@@ -37,7 +21,8 @@ std::unique_ptr<Inverter> createInverter(const std::string& name) {
   return createInverter(name, ps);
 }
 
-std::vector<std::string> inverterNames() { return inverterRegistry().names(); }
+std::vector<std::string> inverterNames() { return InverterRegistry::instance().names(); }
+const StrategyTraits& inverterTraits(const std::string& name) { return InverterRegistry::instance().traits(name); }
 
 bool readDoublePrecision(ParamSet& ps, std::string_view strategy) {
   const std::string p = ps.get<std::string>("precision", "float");

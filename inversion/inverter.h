@@ -20,8 +20,9 @@
 //
 // Concrete strategies are `final` classes deriving from InverterImpl<Self>: invert()
 // and invertD() are the virtual entry points (final, so a call through the concrete
-// type is devirtualised), and Self::invertFast / invertFastD are inline, non-virtual
-// templates for the templated traversal.
+// type is devirtualised), and Self::invertFast / invertFastD are the inline, non-virtual
+// implementations a static traversal instantiation calls. A strategy registers itself
+// in its .cpp: OBLONG_REGISTER_INVERTER("name", factory, StrategyTraits{...}).
 //
 // What "inside T" means for a result: u >= -eps, v >= -eps, u + v <= 1 + eps. For X
 // inside T's prism with a single, well-posed preimage in T (docs/inversion.md: folded
@@ -31,7 +32,7 @@
 #pragma once
 
 #include "core/math.h"
-#include "core/params.h"
+#include "core/registry.h"
 #include "core/triangle.h"
 
 #include <algorithm>
@@ -85,15 +86,16 @@ class InverterImpl : public Inverter {
 
 struct InverterContext {};
 using InverterRegistry = Registry<Inverter, InverterContext>;
+#define OBLONG_REGISTER_INVERTER(name, ...) OBLONG_REGISTER(::oblong::InverterRegistry, name, __VA_ARGS__)
 
-// Creates an inverter by name ("newton", "cubic", and "ceres" once
-// registerCeresInverter() from inversion/ceres.h has run); unknown names and unused
-// parameters throw oblong::Error naming params.where().
+// Creates an inverter by name ("newton", "cubic", and "ceres" in programs that link
+// oblong_ceres); unknown names and unused parameters throw oblong::Error naming
+// params.where().
 std::unique_ptr<Inverter> createInverter(const std::string& name, ParamSet& params,
                                          const InverterContext& ctx = {});
 std::unique_ptr<Inverter> createInverter(const std::string& name);
 std::vector<std::string> inverterNames();
-InverterRegistry& inverterRegistry();  // with newton and cubic registered
+const StrategyTraits& inverterTraits(const std::string& name);
 
 // Reads the "precision" parameter: "float" (default) or "double".
 bool readDoublePrecision(ParamSet& ps, std::string_view strategy);

@@ -4,8 +4,7 @@
 
 namespace oblong {
 
-void registerNewton(InverterRegistry& r) {
-  r.add("newton", [](ParamSet& ps, const InverterContext&) -> std::unique_ptr<Inverter> {
+OBLONG_REGISTER_INVERTER("newton", [](ParamSet& ps, const InverterContext&) -> std::unique_ptr<Inverter> {
     NewtonOptions o;
     o.doublePrecision = readDoublePrecision(ps, "newton");
     o.tolerance = ps.getInRange("tolerance", o.doublePrecision ? 1e-10 : 1e-5, 0.0, 1.0);
@@ -16,7 +15,7 @@ void registerNewton(InverterRegistry& r) {
       fail(ps.where(), "newton: parameter 'fallback' must be \"cubic\" or \"none\" (got \"{}\")", fb);
     o.fallback = fb == "cubic";
     return std::make_unique<Newton>(o);
-  });
-}
+  },
+  StrategyTraits{false, "Newton on the 3x3 system, float or double, cubic fallback (RMIP Sec. 4.1)"});
 
 }  // namespace oblong

@@ -40,6 +40,7 @@
 #include "core/stats.h"
 #include "inversion/cubic.h"
 #include "inversion/inverter.h"
+#include "render/traversal/constants.h"  // the values the Vulkan shader mirrors
 
 namespace oblong {
 
@@ -50,9 +51,9 @@ OBLONG_STAT_COUNTER("newton/Fallbacks", newtonFallbacks);
 
 struct NewtonOptions {
   bool doublePrecision = false;  // arithmetic of invert()
-  double tolerance = 1e-5;
+  double tolerance = OBLONG_NEWTON_TOLERANCE;
   double toleranceD = 1e-10;  // used by invertD()
-  int maxIterations = 10;
+  int maxIterations = OBLONG_NEWTON_MAX_ITERATIONS;
   bool fallback = true;  // to cubic when the result is unconverged or outside T
 };
 
@@ -110,11 +111,11 @@ class Newton final : public InverterImpl<Newton> {
   template <typename S>
   InversionResultT<S> solve(const glm::vec<3, S>& X, const DisplacedTriangle& T, S tol) const {
     InversionResultT<S> r = inv::newtonSolve<S>(X, T, tol, o_.maxIterations);
-    const S eps = sizeof(S) == 4 ? S(1e-5) : S(1e-9);
+    const S eps = sizeof(S) == 4 ? S(OBLONG_NEWTON_OUTSIDE_EPS) : S(1e-9);
     if (o_.fallback && ((!r.converged && tol > S(0)) || !(r.outside() <= eps))) {  // also NaN
       OBLONG_STAT_INC(newtonFallbacks);
       const int it = r.iterations;
-      r = inv::cubicSolve<S>(X, T, 1);
+      r = inv::cubicSolve<S>(X, T, OBLONG_NEWTON_FALLBACK_POLISH);
       r.iterations += it;
     }
     return r;
@@ -122,6 +123,5 @@ class Newton final : public InverterImpl<Newton> {
   NewtonOptions o_;
 };
 
-void registerNewton(InverterRegistry& r);
 
 }  // namespace oblong

@@ -293,6 +293,17 @@ std::vector<EmbreeScene::PrismCounts> EmbreeScene::prismCounts() const {
   return out;
 }
 
+nlohmann::json EmbreeScene::describe() const {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& g : geoms_)
+    if (g && g->intersector) {
+      nlohmann::json j = g->intersector->describe();
+      j["mesh"] = g->mesh;
+      out.push_back(std::move(j));
+    }
+  return out;
+}
+
 EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
     : embreeBytes_(std::make_shared<std::atomic<int64_t>>(0)), tessellate_(opts.tessellate) {
   // A constructor that throws runs no destructor: release the device here (a bad

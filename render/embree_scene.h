@@ -80,6 +80,9 @@ class EmbreeScene {
     size_t built = 0, wellPosed = 0;
   };
   std::vector<PrismCounts> prismCounts() const;
+  // Intersector::describe() of each displaced mesh traced as user geometry ("mesh": its
+  // index): the strategies with their resolved parameters and the code path that ran.
+  nlohmann::json describe() const;
   size_t microTriangles() const { return microTriangles_; }
   size_t baseTriangles() const { return baseTriangles_; }
   double buildSeconds() const { return buildSeconds_; }

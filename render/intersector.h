@@ -1,8 +1,7 @@
 // Intersector: the per-mesh interface between Embree's user geometry and a traversal
 // (DESIGN §2). One Intersector serves one displaced mesh: it bounds every displaced
 // triangle (its prism) and finds the first hit of a ray with one triangle's
-// micro-geometry. The Embree callback is one indirect call per ray/prism pair; inside,
-// the traversal is templated on the concrete strategies (no virtual call per step).
+// micro-geometry. The Embree callback is one indirect call per ray/prism pair.
 #pragma once
 
 #include "core/heightmap.h"
@@ -91,6 +90,9 @@ class Intersector {
   // (r.tmax is the closest hit found so far: prune against it). Adds to c.
   virtual bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const = 0;
   virtual MemoryReport memory() const = 0;
+  // What was built and how it runs, for --stats and `oblong info`: the strategies with
+  // their resolved parameters, the code path, the traversal options.
+  virtual nlohmann::json describe() const { return {{"name", name()}}; }
 };
 
 // Builds the intersector for one displaced mesh: its triangles (DisplacedTriangle,

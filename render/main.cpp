@@ -3,7 +3,7 @@
 //                 [--normals micro|smooth] [--threads N] [--aovs out.exr] [--heatmap steps.png]
 //                 [--stats out.json] [strategy flags]
 //   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv [--stats out.json] [strategy flags]
-//   oblong info   [SCENE.json] [--range NAME]
+//   oblong info   [SCENE.json] [--range NAME] | --strategies [--json]
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
 // --splitter, --marching-scale, --inversion-in-traversal, --baseline, --step.
 // Without a scene file, the built-in default scene is used (no data files needed).
@@ -17,19 +17,16 @@
 #include "core/procedural.h"
 #include "core/scene.h"
 #include "core/stats.h"
-#include "inversion/ceres.h"
 #include "render/embree_scene.h"
 #include "render/image.h"
 #include "render/output.h"
 #include "render/progress.h"
 #include "render/rays_io.h"
 #include "render/renderer.h"
-#include "render/vulkan/commands.h"
+#include "render/strategy_catalog.h"
 #include "render/traversal.h"
-#include "strategies/minmax_mipmap.h"
+#include "render/vulkan/commands.h"
 #include "strategies/range_query.h"
-#include "strategies/rmip.h"
-#include "strategies/safety_zones.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -115,9 +112,9 @@ struct StrategyFlags {
   std::optional<bool> inversionInTraversal;
 
   void add(CLI::App* app) {
-    app->add_option("--range", range, "RangeQuery: rmip | minmax_mipmap | safety_zones");
-    app->add_option("--inverter", inverter, "Inverter: newton | cubic | ceres");
-    app->add_option("--splitter", splitter, "Splitter: midpoint2d | midpoint3d | quadtree");
+    app->add_option("--range", range, "RangeQuery: " + strategyChoices(StrategyKind::Range));
+    app->add_option("--inverter", inverter, "Inverter: " + strategyChoices(StrategyKind::Inverter));
+    app->add_option("--splitter", splitter, "Splitter: " + strategyChoices(StrategyKind::Splitter));
     app->add_option("--marching-scale", marchingScale,
                     "rectangles of at most this many texels are marched (>= 1/64; default: the scene's, 4)");
     app->add_option("--inversion-in-traversal", inversionInTraversal, "invert box intervals (true | false)");
@@ -155,7 +152,6 @@ struct StrategyFlags {
     }
     if (baseline == "tessellated") o.tessellate = true;
     else c.baseline = baseline;
-    if (c.inverter == "ceres") registerCeresInverter();
     return o;
   }
 };
@@ -299,6 +295,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
     j["scene"] = scene.path;
     j["geometry"] = accel.geometryName();
     j["config"] = configJson(accelOpts);
+    j["traversal"] = accel.describe();
     j["image"] = {{"width", opts.size.x}, {"height", opts.size.y}, {"file", f.out}};
     j["integrator"] = integratorName(opts.integrator);
     j["normals"] = shadingNormalsName(opts.normals);
@@ -365,6 +362,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
     j["rays"] = {{"file", raysPath}, {"count", rays.size()}, {"hits", found}};
     j["geometry"] = accel.geometryName();
     j["config"] = configJson(accelOpts);
+    j["traversal"] = accel.describe();
     j["seconds"] = {{"build", accel.buildSeconds()}, {"trace", seconds}};
     j["mrays_per_second"] = rays.size() / std::max(seconds, 1e-9) * 1e-6;
     for (const auto& m : mem) j["memory"][m.name] = m.bytes;
@@ -378,71 +376,70 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   return 0;
 }
 
-// What the range query chosen for one displaced mesh built (DESIGN invariant 4): its
-// layers or levels, wrap storage and bytes of each part.
-void printRangeQuery(const RangeQuery& rq, const TraversalConfig& cfg) {
-  const int W = rq.map().width(), H = rq.map().height();
-  if (const auto* r = dynamic_cast<const Rmip*>(&rq)) {
-    const int c = cfg.rangeParams.is_object() ? cfg.rangeParams.value("compression", 1) : 1;
-    const int P = r->layersX() - 1, Q = r->layersY() - 1, rw = r->resolutionX(), rh = r->resolutionY();
-    const int fullP = int(std::bit_width(unsigned(rw))) - 1, fullQ = int(std::bit_width(unsigned(rh))) - 1;
-    fmt::print("      pixels   : {}x{} ({} sample{} per pixel per axis), compression {}\n", rw, rh,
-               r->downsample(), r->downsample() == 1 ? "" : "s", c);
-    fmt::print("      layers   : (p, q) for p 0..{}, q 0..{}: {} layers of the {} a full pyramid has "
-               "(block 2^p x 2^q texels)\n", P, Q, (P + 1) * (Q + 1), (fullP + 1) * (fullQ + 1));
-    // Bytes per layer, from the layout the constructor used (Rmip::layout), and the
-    // same layout without the wrapping corners.
-    Rmip::Options o;
-    o.compression = c;
-    o.resolution = cfg.rangeParams.is_object() ? cfg.rangeParams.value("resolution", 0) : 0;
-    const Rmip::Layout L = Rmip::layout(W, H, rq.needs(), o);
-    QueryNeeds inside = rq.needs();
-    inside.wrap = false;
-    const size_t noWrap = Rmip::layout(W, H, inside, o).entries * sizeof(Interval);
-    size_t sum = 0;
-    std::vector<std::vector<size_t>> bytes(size_t(P + 1), std::vector<size_t>(size_t(Q + 1)));
-    for (int p = 0; p <= P && p <= L.P; ++p)
-      for (int q = 0; q <= Q && q <= L.Q; ++q) {
-        const Rmip::Layer& l = L.layers[size_t(p) * (L.Q + 1) + q];
-        bytes[p][q] = size_t(l.nx) * size_t(l.ny) * sizeof(Interval);
-        sum += bytes[p][q];
-      }
-    size_t built = 0;
-    for (const auto& m : rq.memory())
-      if (m.name == "rmip/layers") built = m.bytes;
-    if (sum == built) {
-      std::string head = "      bytes    :     ";
-      for (int q = 0; q <= Q; ++q) head += fmt::format("{:>11}", fmt::format("q={}", q));
-      fmt::print("{}\n", head);
-      for (int p = 0; p <= P; ++p) {
-        std::string row = fmt::format("                 p={:<3}", p);
-        for (int q = 0; q <= Q; ++q) row += fmt::format("{:>11}", human(bytes[p][q]));
-        fmt::print("{}\n", row);
-      }
-    } else {
-      fmt::print("      bytes    : per-layer breakdown unavailable (layout changed; total below)\n");
-    }
-    if (r->storesWrap())
-      fmt::print("      wrap     : corners wrapping around the map border stored: {} of the layers\n",
-                 sum == built ? human(sum - noWrap) : std::string("(see above)"));
-    else
-      fmt::print("      wrap     : none stored (no query crosses the map border)\n");
-  } else if (const auto* m = dynamic_cast<const MinMaxMipmap*>(&rq)) {
-    const int full = int(std::bit_width(unsigned(std::max(W, H) - 1))) + 1;
-    fmt::print("      levels   : 0..{} of the {} a full mipmap has (level 0 is the map itself)\n", m->levels() - 1,
-               full);
-    for (int k = 1; k < m->levels(); ++k)
-      fmt::print("      level {:<2} : {}x{} nodes, {}\n", k, m->levelWidth(k), m->levelHeight(k),
-                 human(size_t(m->levelWidth(k)) * m->levelHeight(k) * sizeof(Interval)));
-    fmt::print("      wrap     : none stored (queries crossing the border are split)\n");
-  } else if (const auto* z = dynamic_cast<const SafetyZones*>(&rq)) {
-    std::string ds;
-    for (int d : z->deltas()) ds += fmt::format("{}{}", ds.empty() ? "" : ", ", d);
-    fmt::print("      zones    : deltas [{}], one {}x{} min/max map each, {} each\n", ds, W, H,
-               human(size_t(W) * H * sizeof(Interval)));
-    fmt::print("      wrap     : none stored (wrap addressing while building)\n");
+// One value of a describe() JSON for `oblong info`: byte counts (keys ending in
+// "bytes") in human units, arrays as [a, b, ...].
+std::string infoValue(const std::string& key, const nlohmann::json& v) {
+  const bool bytes = key.size() >= 5 && key.compare(key.size() - 5, 5, "bytes") == 0;
+  if (v.is_array()) {
+    std::string s;
+    for (const auto& e : v) s += (s.empty() ? "" : ", ") + infoValue(key, e);
+    return "[" + s + "]";
   }
+  if (bytes && v.is_number_unsigned()) return human(v.get<size_t>());
+  return v.is_string() ? v.get<std::string>() : v.dump();
+}
+
+// What the traversal built for one displaced mesh (DESIGN invariant 4), from its
+// describe(): the range query's layout and bytes, the strategies' resolved parameters,
+// the code path.
+void printTraversal(const nlohmann::json& d) {
+  const nlohmann::json& rq = d.at("range");
+  fmt::print("      built    : {} ({}), {}\n", rq.at("exact").get<bool>() ? "exact bounds" : "conservative bounds",
+             infoValue("params", rq.at("params")), human(rq.at("bytes").get<size_t>()));
+  if (rq.contains("layout"))
+    for (const auto& [k, v] : rq.at("layout").items()) {
+      if (k == "stores_wrap" || k == "wrap_bytes") continue;
+      // A table (array of arrays): one line per row.
+      if (v.is_array() && !v.empty() && v[0].is_array() && v[0].size() > 2) {
+        for (size_t r = 0; r < v.size(); ++r) {
+          std::string row;
+          for (const auto& e : v[r]) row += fmt::format("{:>11}", infoValue(k, e));
+          fmt::print("      {:<20}: {:>3} {}\n", r == 0 ? k : "", r, row);
+        }
+        continue;
+      }
+      fmt::print("      {:<20}: {}\n", k, infoValue(k, v));
+    }
+  if (rq.contains("layout") && rq.at("layout").value("stores_wrap", false))
+    fmt::print("      wrap     : corners wrapping around the map border stored{}\n",
+               rq.at("layout").contains("wrap_bytes")
+                   ? ": " + infoValue("wrap_bytes", rq.at("layout").at("wrap_bytes")) + " of it"
+                   : std::string());
+  else
+    fmt::print("      wrap     : none stored (queries crossing the border are split, or wrap addressing)\n");
   fmt::print("      LoD      : no levels built (LoD off: only lod 0 is defined, docs/decisions.md)\n");
+  fmt::print("    traversal: {} path; inverter {} {}; splitter {} {}; marching scale {}, inversion in traversal {}\n",
+             d.at("path").get<std::string>(), d.at("inverter").at("name").get<std::string>(),
+             infoValue("", d.at("inverter").at("params")), d.at("splitter").at("name").get<std::string>(),
+             infoValue("", d.at("splitter").at("params")), d.at("marching_scale").get<float>(),
+             d.at("inversion_in_traversal").get<bool>() ? "on" : "off");
+}
+
+// `oblong info --strategies`: every registered strategy (what the experiments read).
+int runStrategies(bool json) {
+  const nlohmann::json j = strategiesJson();
+  if (json) {
+    fmt::print("{}\n", j.dump(2));
+    return 0;
+  }
+  for (const char* kind : {"range", "inverter", "splitter"}) {
+    fmt::print("{}:\n", kind);
+    for (const auto& e : j.at(kind))
+      fmt::print("  {:<14} {}{}\n", e.at("name").get<std::string>(), e.at("summary").get<std::string>(),
+                 e.at("slow_reference").get<bool>() ? " [slow reference]" : "");
+  }
+  fmt::print("baselines: tessellated | bruteforce | fixedstep\n");
+  return 0;
 }
 
 int runInfo(const std::string& scenePath, const std::string& range) {
@@ -480,7 +477,7 @@ int runInfo(const std::string& scenePath, const std::string& range) {
     const auto is = createIntersector(cfg, tris, d);
     if (const auto* t = dynamic_cast<const TraversalIntersectorBase*>(is.get())) {
       fmt::print("    range query '{}' for displaced mesh {}:\n", t->rangeQuery().name(), displaced);
-      printRangeQuery(t->rangeQuery(), cfg);
+      printTraversal(t->describe());
       size_t prisms = 0, wellPosed = 0;
       for (const PrismParams& pp : t->mesh().params) prisms += pp.valid, wellPosed += pp.valid && pp.wellPosed;
       fmt::print("    prisms   : {} built ({} well-posed, {} box-only), {} skipped (not displaceable)\n", prisms,
@@ -552,6 +549,9 @@ int main(int argc, char** argv) {
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
   info->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
   info->add_option("--range", range, "range-query strategy (default: the scene's)");
+  bool listStrategies = false, infoJson = false;
+  info->add_flag("--strategies", listStrategies, "list the registered strategies (what --range etc. accept)");
+  info->add_flag("--json", infoJson, "with --strategies: as JSON (read by the experiments)");
 
   try {
     app.parse(argc, argv);
@@ -570,6 +570,8 @@ int main(int argc, char** argv) {
     rf.defaultOut = renderOut->count() == 0;
     if (*render) return runRender(scenePath, rf, flags);
     if (*trace) return runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, flags);
+    if (*info && listStrategies) return runStrategies(infoJson);
+    if (*info && infoJson) fail("--json", "only applies to --strategies");
     if (*info) return runInfo(scenePath, range);
   } catch (const Error& e) {
     fmt::print(stderr, "oblong: {}\n", e.what());

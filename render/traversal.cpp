@@ -5,9 +5,6 @@
 
 #include "core/error.h"
 #include "core/scene.h"
-#include "strategies/minmax_mipmap.h"
-#include "strategies/rmip.h"
-#include "strategies/safety_zones.h"
 
 #include <fmt/format.h>
 
@@ -240,21 +237,39 @@ std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::
   TraversalParts parts;
   parts.name = cfg.range + "+" + cfg.inverter + "+" + cfg.splitter;
   const RangeQuery& q = *rq;
-  parts.mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return q.queryVirtual(T.uvBox); });
+  parts.mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return q.query(T.uvBox); });
   warnSkippedTriangles(parts.mesh, parts.name);
   parts.rq = std::move(rq);
   parts.inv = std::move(inv);
   parts.split = std::move(split);
+  parts.rangeParams = rps.resolved();
+  parts.inverterParams = ips.resolved();
+  parts.splitterParams = sps.resolved();
   parts.opt = TraversalOptions{cfg.marchingScale, cfg.inversionInTraversal};
+  for (const StaticTraversal& st : staticTraversals())
+    if (st.matches(parts)) return st.make(std::move(parts));
+  return makeGenericTraversal(std::move(parts));
+}
 
-  std::unique_ptr<Intersector> out;
-  const RangeQuery* r = parts.rq.get();
-  if (dynamic_cast<const Rmip*>(r)) out = makeRmipTraversal(std::move(parts));
-  else if (dynamic_cast<const MinMaxMipmap*>(r)) out = makeMinMaxMipmapTraversal(std::move(parts));
-  else if (dynamic_cast<const SafetyZones*>(r)) out = makeSafetyZonesTraversal(std::move(parts));
-  // Anything else (ceres, a new strategy): virtual calls, same algorithm.
-  if (!out) out = makeGenericTraversal(std::move(parts));
-  return out;
+std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p) {
+  return std::make_unique<Traversal<RangeQuery, Inverter, Splitter>>(std::move(p));
+}
+
+std::vector<StaticTraversal>& staticTraversals() {
+  static std::vector<StaticTraversal> list;
+  return list;
+}
+
+nlohmann::json TraversalIntersectorBase::describe() const {
+  nlohmann::json range = rq_->describe();
+  range["params"] = params_[0];
+  return {{"name", name_},
+          {"path", path_},
+          {"range", range},
+          {"inverter", {{"name", std::string(inv_->name())}, {"params", params_[1]}}},
+          {"splitter", {{"name", std::string(split_->name())}, {"params", params_[2]}}},
+          {"marching_scale", opt_.marchingScale},
+          {"inversion_in_traversal", opt_.inversionInTraversal}};
 }
 
 }  // namespace oblong

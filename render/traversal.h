@@ -1,9 +1,9 @@
 // The traversal driver (RMIP paper Alg. 1; DESIGN §2): Traversal<RQ, Inv, Split>, an
-// Intersector templated on the concrete strategy types so that the hot loop has no
-// virtual call. createIntersector (render/intersector.h) instantiates it for every
-// registered combination of {rmip, minmax_mipmap, safety_zones} × {newton, cubic} ×
-// {midpoint2d, midpoint3d, quadtree} and falls back to Traversal<RangeQuery, Inverter,
-// Splitter> (virtual calls) for anything else (ceres, new strategies).
+// Intersector over any registered strategy combination. createIntersector
+// (render/intersector.h) builds Traversal<RangeQuery, Inverter, Splitter>, which calls
+// the strategies through their virtual interfaces (one indirect call per range query,
+// inversion and split); an opt-in static instantiation on concrete types is one line
+// (OBLONG_STATIC_TRAVERSAL below) and is kept only where a benchmark shows it faster.
 //
 // Per ray and displaced triangle (docs/traversal.md has the reasoning):
 //   1. Clip the ray to the triangle's inflated prism (render/prism.h); its crossings give
@@ -35,6 +35,7 @@
 #include "render/prism.h"
 #include "render/psi.h"
 #include "render/rect_bounds.h"
+#include "render/traversal/constants.h"
 #include "strategies/range_query.h"
 #include "strategies/splitter.h"
 
@@ -75,10 +76,10 @@ struct RayMargins {
   double rayErr, boxPad, extraB, extraS;
   static RayMargins make(const PrismParams& P, double maxP, double maxO) {
     RayMargins m;
-    m.rayErr = 1e-6 * (maxP + maxO + std::abs(P.a) + std::abs(P.b));
+    m.rayErr = OBLONG_TRAV_RAY_ERR * (maxP + maxO + std::abs(P.a) + std::abs(P.b));
     m.boxPad = P.vertexErr + m.rayErr;
-    m.extraB = (P.kb.x + P.kb.y) * 2 * m.rayErr;
-    m.extraS = P.ks * 2 * m.rayErr;
+    m.extraB = (P.kb.x + P.kb.y) * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
+    m.extraS = P.ks * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
     return m;
   }
   Prism prism(const LocalFrame& F, const PrismParams& P) const {
@@ -113,7 +114,7 @@ struct PrismOBB {
       mag = std::max({mag, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
     }
     // The pad of the boxes, plus the rounding of these dot products here and per ray.
-    const double r = pad + 1e-12 * (mag + 1);
+    const double r = pad + OBLONG_TRAV_OBB_ROUND * (mag + 1);
     b.lo -= dvec3(r);
     b.hi += dvec3(r);
     return b;
@@ -175,12 +176,12 @@ struct TraversalMesh {
     const dvec3 O(r.o), D(r.d);
     const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
     if (!(maxO <= originBudget[prim])) return false;
-    const double tAbs = 8 * budgetPad[prim] / glm::length(D);
-    double t0 = r.tmin - (1e-5 * std::abs(double(r.tmin)) + tAbs);
-    double t1 = r.tmax + (1e-5 * std::abs(double(r.tmax)) + tAbs);
+    const double tAbs = OBLONG_TRAV_T_ABS_PADS * budgetPad[prim] / glm::length(D);
+    double t0 = r.tmin - (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmin)) + tAbs);
+    double t1 = r.tmax + (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmax)) + tAbs);
     inflatedBoxes[prim].clip(O, 1.0 / D, t0, t1);
     if (!(t0 <= t1)) return true;
-    if (obbs[prim].valid()) obbs[prim].clip(O, D, 1e-12 * (maxO + 1), t0, t1);
+    if (obbs[prim].valid()) obbs[prim].clip(O, D, OBLONG_TRAV_OBB_ROUND * (maxO + 1), t0, t1);
     return !(t0 <= t1);
   }
 };
@@ -258,30 +259,22 @@ struct ClosestHit {
 
 namespace detail {
 
-// Strategy calls: direct for concrete types, virtual for the abstract bases.
+// Strategy calls: virtual through the interfaces (the default, generic path); inline
+// for concrete strategy types (an opt-in static instantiation, OBLONG_STATIC_TRAVERSAL).
 template <typename RQ>
 inline Interval rawRange(const RQ& q, const SampleRange& r) {
-  return q.rawRange(r);
-}
-template <>
-inline Interval rawRange<RangeQuery>(const RangeQuery& q, const SampleRange& r) {
-  return q.rawRangeVirtual(r);
+  if constexpr (std::is_same_v<RQ, RangeQuery>) return q.rawRange(r);
+  else return q.rawRangeFast(r);
 }
 template <typename Inv>
 inline InversionResult invert(const Inv& inv, const vec3& X, const DisplacedTriangle& T) {
-  return inv.invertFast(X, T);
-}
-template <>
-inline InversionResult invert<Inverter>(const Inverter& inv, const vec3& X, const DisplacedTriangle& T) {
-  return inv.invert(X, T);
+  if constexpr (std::is_same_v<Inv, Inverter>) return inv.invert(X, T);
+  else return inv.invertFast(X, T);
 }
 template <typename Split, typename Ctx>
 inline bool split(const Split& s, const CurvePiece& p, Ctx& ctx, CurvePiece& f, CurvePiece& b) {
-  return s.splitFast(p, ctx, f, b);
-}
-template <typename Ctx>
-inline bool split(const Splitter& s, const CurvePiece& p, Ctx& ctx, CurvePiece& f, CurvePiece& b) {
-  return s.splitVirtual(p, ctx, f, b);
+  if constexpr (std::is_same_v<Split, Splitter>) return s.split(p, ctx, f, b);
+  else return s.splitFast(p, ctx, f, b);
 }
 
 }  // namespace detail
@@ -296,7 +289,7 @@ struct TraversalOptions {
 template <typename RQ, typename Inv>
 class RayPatch final : public SplitContext {
  public:
-  static constexpr int kStack = 128;
+  static constexpr int kStack = OBLONG_TRAV_STACK;
 
   RayPatch(const TraversalMesh& mesh, uint32_t prim, const RQ& rq, const Inv& inv, const TraversalOptions& opt,
            const Ray& ray, RayCounters& counters)
@@ -329,8 +322,8 @@ class RayPatch final : public SplitContext {
     const RayMargins m = RayMargins::make(P_, maxAbsVertex(T_), maxO);
     boxPad_ = m.boxPad;
     // Slack for comparing float hit distances with double interval ends.
-    tAbs_ = 8 * boxPad_ / glm::length(D_);
-    eps_ = P_.eps + P_.kxy * (2 * m.rayErr);
+    tAbs_ = OBLONG_TRAV_T_ABS_PADS * boxPad_ / glm::length(D_);
+    eps_ = P_.eps + P_.kxy * (OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr);
     if (pre) {
       prism_ = &mesh.prisms[prim];
       prismBox_ = mesh.prismBoxes[prim];
@@ -439,7 +432,7 @@ class RayPatch final : public SplitContext {
   // Raw storage: a std::array<Entry> would run 128 default constructors per prism.
   Entry* stack() { return reinterpret_cast<Entry*>(stackRaw_); }
 
-  double slack(double t) const { return 1e-5 * std::abs(t) + tAbs_; }
+  double slack(double t) const { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tAbs_; }
   double bestLimit() const { return hit_.found ? double(hit_.t) + slack(hit_.t) : double(ray_.tmax) + slack(ray_.tmax); }
 
   void pushPiece(const CurvePiece& p) {
@@ -465,12 +458,14 @@ class RayPatch final : public SplitContext {
     const dvec3 G = F_.G(b, s);
     const double mag = std::max({std::abs(X.x), std::abs(X.y), std::abs(X.z), std::abs(G.x), std::abs(G.y),
                                  std::abs(G.z)});
-    const double r = glm::length(G - X) + 1e-14 * mag;
-    const dvec2 db = P_.kb * r * 1.001;
-    if (!(db.x + db.y < 0.01) || !(P_.ks * r < 0.01 * (P_.domainS1 - P_.domainS0) + 1e-300)) return false;
+    const double r = glm::length(G - X) + OBLONG_TRAV_RESIDUAL_ROUND * mag;
+    const dvec2 db = P_.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
+    if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
+        !(P_.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (P_.domainS1 - P_.domainS0) + OBLONG_TRAV_TINY))
+      return false;
     out.t = t;
     out.uv = F_.local(b);
-    out.pad = P_.kxy * (r * 1.001) + 1e-9 * (1.0 + glm::abs(out.uv));
+    out.pad = P_.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(out.uv));
     return std::isfinite(out.uv.x) && std::isfinite(out.uv.y);
   }
 
@@ -501,9 +496,9 @@ class RayPatch final : public SplitContext {
 
   // Local cells touching [lo, hi], clipped to T's cells. False when empty.
   bool snap(const dvec2& lo, const dvec2& hi, ivec2& clo, ivec2& chi) const {
-    constexpr double lim = 1e9;
+    constexpr double lim = OBLONG_TRAV_SNAP_LIMIT;
     for (int k = 0; k < 2; ++k) {
-      const double eta = 1e-9 * (1 + std::abs(lo[k]) + std::abs(hi[k]));
+      const double eta = OBLONG_TRAV_SNAP_ETA * (1 + std::abs(lo[k]) + std::abs(hi[k]));
       clo[k] = int(std::clamp(std::floor(lo[k] - eta), -lim, lim));
       chi[k] = int(std::clamp(std::floor(hi[k] + eta), -lim, lim));
     }
@@ -559,7 +554,7 @@ class RayPatch final : public SplitContext {
     // An endpoint whose major coordinate may be c (within its pad): the sub-arc may
     // start or end there.
     for (const CurvePoint* e : {&p.a, &p.b})
-      if (std::abs(c - e->uv[ax]) <= e->pad[ax] * 1.0000001 + 1e-12) {
+      if (std::abs(c - e->uv[ax]) <= e->pad[ax] * OBLONG_TRAV_END_PAD_REL + OBLONG_TRAV_END_PAD_ABS) {
         wlo = std::min(wlo, e->uv[mi] - e->pad[mi]);
         whi = std::max(whi, e->uv[mi] + e->pad[mi]);
       }
@@ -598,7 +593,7 @@ class RayPatch final : public SplitContext {
       minorAt(p, ax, c1, b0, b1);
       // Monotone: in between, the minor coordinate lies between its values at c0 and c1.
       const double wlo = std::min(a0, b0) - eps_[mi], whi = std::max(a1, b1) + eps_[mi];
-      const double eta = 1e-9 * (1 + std::abs(wlo) + std::abs(whi));
+      const double eta = OBLONG_TRAV_SNAP_ETA * (1 + std::abs(wlo) + std::abs(whi));
       const int j0 = std::max(int(std::floor(wlo - eta)), clo[mi]), j1 = std::min(int(std::floor(whi + eta)), chi[mi]);
       for (int j = sm > 0 ? j0 : j1; sm > 0 ? j <= j1 : j >= j0; j += sm) {
         if (ax == 0) testCell(k, j);
@@ -616,7 +611,7 @@ class RayPatch final : public SplitContext {
     const dvec2 pads = p.a.pad + p.b.pad;
     auto small = [&] {
       const int la = ext.x >= ext.y ? 0 : 1;
-      return ext[la] <= ms || pads[la] > 0.25 * ext[la];
+      return ext[la] <= ms || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
     };
     if (small()) return march(p);
     ivec2 clo, chi;
@@ -625,7 +620,7 @@ class RayPatch final : public SplitContext {
     if (!clipToCells(clo, chi, t0, t1)) return;
     if (opt_.inversionInTraversal) {
       // Fig. 5a: the clipped ends' projections can give a much smaller rectangle.
-      const double minGain = 1e-3 * (p.b.t - p.a.t);
+      const double minGain = 5e-2 * (p.b.t - p.a.t);  // SCRATCH: CPU-only change, to be reverted
       CurvePoint m;
       if (t0 > p.a.t + minGain && invertAt(t0, m)) p.a = m;
       if (t1 < p.b.t - minGain && invertAt(t1, m)) p.b = m;
@@ -650,7 +645,8 @@ class RayPatch final : public SplitContext {
     const double limit = bestLimit();
     if (e.ta > limit) return;
     const ivec2 n = e.chi - e.clo + 1;
-    if (std::max(n.x, n.y) <= std::max(1.0f, opt_.marchingScale)) return testCells(e.clo, e.chi);
+    if (std::max(n.x, n.y) <= std::max(float(OBLONG_TRAV_MIN_BOX_CELLS), opt_.marchingScale))
+      return testCells(e.clo, e.chi);
     double t0 = e.ta, t1 = std::min(e.tb, limit);
     if (!clipToCells(e.clo, e.chi, t0, t1)) return;
     if (sp_ + 2 > kStack) {
@@ -722,17 +718,30 @@ class RayPatch final : public SplitContext {
   const MicroCells& cells() const { return *reinterpret_cast<const MicroCells*>(mcRaw_); }
 };
 
+// What createIntersector hands to a traversal instantiation: the built strategies, their
+// resolved parameters and the per-triangle constants.
+struct TraversalParts {
+  std::string name;
+  TraversalMesh mesh;
+  std::unique_ptr<RangeQuery> rq;
+  std::unique_ptr<Inverter> inv;
+  std::unique_ptr<Splitter> split;
+  nlohmann::json rangeParams, inverterParams, splitterParams;  // ParamSet::resolved()
+  TraversalOptions opt;
+};
+
 // Shared part of the traversal intersectors.
 class TraversalIntersectorBase : public Intersector {
  public:
-  TraversalIntersectorBase(std::string name, TraversalMesh mesh, std::unique_ptr<RangeQuery> rq,
-                           std::unique_ptr<Inverter> inv, std::unique_ptr<Splitter> split, TraversalOptions opt)
-      : name_(std::move(name)),
-        mesh_(std::move(mesh)),
-        rq_(std::move(rq)),
-        inv_(std::move(inv)),
-        split_(std::move(split)),
-        opt_(opt) {}
+  TraversalIntersectorBase(TraversalParts&& p, std::string path)
+      : name_(std::move(p.name)),
+        path_(std::move(path)),
+        mesh_(std::move(p.mesh)),
+        rq_(std::move(p.rq)),
+        inv_(std::move(p.inv)),
+        split_(std::move(p.split)),
+        params_{std::move(p.rangeParams), std::move(p.inverterParams), std::move(p.splitterParams)},
+        opt_(p.opt) {}
   std::string name() const override { return name_; }
   size_t size() const override { return mesh_.tris.size(); }
   AABB bounds(uint32_t prim) const override { return mesh_.bounds(prim); }
@@ -741,22 +750,29 @@ class TraversalIntersectorBase : public Intersector {
     r.push_back({"traversal/triangles", mesh_.bytes()});
     return r;
   }
+  nlohmann::json describe() const override;
+  // "generic" (virtual calls into the strategies) or "static" (an opt-in instantiation
+  // on the concrete strategy types).
+  const std::string& path() const { return path_; }
   const TraversalMesh& mesh() const { return mesh_; }
   const RangeQuery& rangeQuery() const { return *rq_; }
 
  protected:
-  std::string name_;
+  std::string name_, path_;
   TraversalMesh mesh_;
   std::unique_ptr<RangeQuery> rq_;
   std::unique_ptr<Inverter> inv_;
   std::unique_ptr<Splitter> split_;
+  nlohmann::json params_[3];  // range, inverter, splitter
   TraversalOptions opt_;
 };
 
 template <typename RQ, typename Inv, typename Split>
 class Traversal final : public TraversalIntersectorBase {
  public:
-  using TraversalIntersectorBase::TraversalIntersectorBase;
+  static constexpr bool kGeneric =
+      std::is_same_v<RQ, RangeQuery> && std::is_same_v<Inv, Inverter> && std::is_same_v<Split, Splitter>;
+  explicit Traversal(TraversalParts&& p) : TraversalIntersectorBase(std::move(p), kGeneric ? "generic" : "static") {}
 
   bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
     if (!mesh_.params[prim].valid) return false;
@@ -777,29 +793,38 @@ class Traversal final : public TraversalIntersectorBase {
   }
 };
 
-// What createIntersector hands to the per-range-query instantiation files.
-struct TraversalParts {
-  std::string name;
-  TraversalMesh mesh;
-  std::unique_ptr<RangeQuery> rq;
-  std::unique_ptr<Inverter> inv;
-  std::unique_ptr<Splitter> split;
-  TraversalOptions opt;
+// The generic path: Traversal<RangeQuery, Inverter, Splitter> (traversal.cpp).
+std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p);
+
+// Opt-in static instantiations. The generic path is the default: measured on this code,
+// instantiations on the concrete strategy types ran 1-3% slower (docs/traversal.md), so
+// none is registered. One that a benchmark shows to be faster is one line in a .cpp
+// linked into the program:
+//     OBLONG_STATIC_TRAVERSAL(Rmip, Newton, Midpoint2D);
+// createIntersector then uses it for exactly that combination (`path()` says which ran).
+struct StaticTraversal {
+  bool (*matches)(const TraversalParts&);
+  std::unique_ptr<Intersector> (*make)(TraversalParts&&);
 };
+std::vector<StaticTraversal>& staticTraversals();
 
 template <typename RQ, typename Inv, typename Split>
-std::unique_ptr<Intersector> makeTraversal(TraversalParts&& p) {
-  return std::make_unique<Traversal<RQ, Inv, Split>>(std::move(p.name), std::move(p.mesh), std::move(p.rq),
-                                                     std::move(p.inv), std::move(p.split), p.opt);
+StaticTraversal staticTraversal() {
+  return {[](const TraversalParts& p) {
+            return dynamic_cast<const RQ*>(p.rq.get()) && dynamic_cast<const Inv*>(p.inv.get()) &&
+                   dynamic_cast<const Split*>(p.split.get());
+          },
+          [](TraversalParts&& p) -> std::unique_ptr<Intersector> {
+            return std::make_unique<Traversal<RQ, Inv, Split>>(std::move(p));
+          }};
 }
-
-// Defined in traversal_<range>.cpp: the six {newton, cubic} × splitter instantiations for
-// one range query, nullptr when the inverter or splitter is not one of the built-in ones.
-std::unique_ptr<Intersector> makeRmipTraversal(TraversalParts&& p);
-std::unique_ptr<Intersector> makeMinMaxMipmapTraversal(TraversalParts&& p);
-std::unique_ptr<Intersector> makeSafetyZonesTraversal(TraversalParts&& p);
-// traversal_generic.cpp: Traversal<RangeQuery, Inverter, Splitter>.
-std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p);
+struct StaticTraversalRegistration {
+  explicit StaticTraversalRegistration(StaticTraversal t) { staticTraversals().push_back(t); }
+};
+#define OBLONG_STATIC_TRAVERSAL(RQ, Inv, Split)                                                          \
+  static const ::oblong::StaticTraversalRegistration OBLONG_REGISTRY_CAT(oblongStaticTraversal_, __LINE__) { \
+    ::oblong::staticTraversal<RQ, Inv, Split>()                                                         \
+  }
 
 // The baselines sharing the micro-geometry (traversal.cpp).
 std::unique_ptr<Intersector> makeBruteForce(std::vector<DisplacedTriangle> triangles, const Displacement& disp);

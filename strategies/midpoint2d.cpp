@@ -2,10 +2,9 @@
 
 namespace oblong {
 
-void registerMidpoint2D(SplitterRegistry& r) {
-  r.add("midpoint2d", [](ParamSet&, const SplitterContext&) -> std::unique_ptr<Splitter> {
+OBLONG_REGISTER_SPLITTER("midpoint2d", [](ParamSet&, const SplitterContext&) -> std::unique_ptr<Splitter> {
     return std::make_unique<Midpoint2D>();
-  });
-}
+  },
+  StrategyTraits{false, "split the longer side of the rectangle in the middle (RMIP Sec. 4.3, Fig. 5c)"});
 
 }  // namespace oblong

@@ -36,6 +36,5 @@ class Midpoint2D final : public SplitterImpl<Midpoint2D> {
   }
 };
 
-void registerMidpoint2D(SplitterRegistry& r);
 
 }  // namespace oblong

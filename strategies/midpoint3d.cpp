@@ -2,10 +2,9 @@
 
 namespace oblong {
 
-void registerMidpoint3D(SplitterRegistry& r) {
-  r.add("midpoint3d", [](ParamSet&, const SplitterContext&) -> std::unique_ptr<Splitter> {
+OBLONG_REGISTER_SPLITTER("midpoint3d", [](ParamSet&, const SplitterContext&) -> std::unique_ptr<Splitter> {
     return std::make_unique<Midpoint3D>();
-  });
-}
+  },
+  StrategyTraits{false, "invert the midpoint of the ray interval (RMIP Sec. 4.3, Fig. 5b)"});
 
 }  // namespace oblong

@@ -35,6 +35,5 @@ class Midpoint3D final : public SplitterImpl<Midpoint3D> {
   }
 };
 
-void registerMidpoint3D(SplitterRegistry& r);
 
 }  // namespace oblong

@@ -60,10 +60,9 @@ MinMaxMipmap::MinMaxMipmap(const Displacement& d, const QueryNeeds& needs) : Ran
   }
 }
 
-void registerMinMaxMipmap(RangeQueryRegistry& r) {
-  r.add("minmax_mipmap", [](ParamSet&, const RangeQueryContext& ctx) -> std::unique_ptr<RangeQuery> {
+OBLONG_REGISTER_RANGE_QUERY("minmax_mipmap", [](ParamSet&, const RangeQueryContext& ctx) -> std::unique_ptr<RangeQuery> {
     return std::make_unique<MinMaxMipmap>(ctx.displacement, ctx.needs);
-  });
-}
+  },
+  StrategyTraits{false, "min-max mipmap, bounds from aligned power-of-two nodes (TFDM, Thonat et al. 2021)"});
 
 }  // namespace oblong

@@ -59,13 +59,21 @@ class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
     return data_[offset_[k - 1] + size_t(j) * levelWidth(k) + i];
   }
 
-  Interval rawRange(const SampleRange& r) const {
+  Interval rawRangeFast(const SampleRange& r) const {
     OBLONG_STAT_INC(mmQueries);
     const AxisPieces px = splitAxis(r.x0, r.x1, map().width()), py = splitAxis(r.y0, r.y1, map().height());
     Interval out;
     for (int b = 0; b < py.count; ++b)
       for (int a = 0; a < px.count; ++a) out.extend(piece(px.lo[a], px.hi[a], py.lo[b], py.hi[b]));
     return out;
+  }
+
+ protected:
+  nlohmann::json describeLayout() const override {
+    nlohmann::json sizes = nlohmann::json::array();
+    for (int k = 1; k <= K_; ++k) sizes.push_back({levelWidth(k), levelHeight(k)});
+    const int full = int(std::bit_width(unsigned(std::max(map().width(), map().height()) - 1))) + 1;
+    return {{"levels", K_ + 1}, {"full_mipmap_levels", full}, {"level_sizes", sizes}, {"stores_wrap", false}};
   }
 
  private:

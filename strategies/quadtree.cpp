@@ -2,10 +2,9 @@
 
 namespace oblong {
 
-void registerQuadtree(SplitterRegistry& r) {
-  r.add("quadtree", [](ParamSet&, const SplitterContext&) -> std::unique_ptr<Splitter> {
+OBLONG_REGISTER_SPLITTER("quadtree", [](ParamSet&, const SplitterContext&) -> std::unique_ptr<Splitter> {
     return std::make_unique<Quadtree>();
-  });
-}
+  },
+  StrategyTraits{false, "split on the coarsest node-aligned grid line, no inversion (TFDM)"});
 
 }  // namespace oblong

@@ -65,6 +65,5 @@ class Quadtree final : public SplitterImpl<Quadtree> {
   }
 };
 
-void registerQuadtree(SplitterRegistry& r);
 
 }  // namespace oblong

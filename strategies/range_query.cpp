@@ -1,41 +1,32 @@
-// RangeQuery registry, brute-force oracle and QueryNeeds (see range_query.h and
-// docs/range_query.md). Strategies are registered explicitly here: a static
-// self-registering object in a strategy's .cpp would be dropped by the static-library
-// linker when nothing else references that object file.
+// RangeQuery registry access, brute-force oracle and QueryNeeds (see range_query.h and
+// docs/range_query.md). The strategies register themselves (core/registry.h).
 #include "strategies/range_query.h"
 
 #include "core/error.h"
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 
 namespace oblong {
-
-void registerRmip(RangeQueryRegistry& r);
-void registerMinMaxMipmap(RangeQueryRegistry& r);
-void registerSafetyZones(RangeQueryRegistry& r);
-
-namespace {
-RangeQueryRegistry& registry() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    auto& r = RangeQueryRegistry::instance();
-    registerRmip(r);
-    registerMinMaxMipmap(r);
-    registerSafetyZones(r);
-  });
-  return RangeQueryRegistry::instance();
-}
-}  // namespace
 
 std::unique_ptr<RangeQuery> createRangeQuery(const std::string& name, ParamSet& params,
                                              const RangeQueryContext& ctx) {
   if (!ctx.displacement.map) fail(params.where(), "range query '{}' needs a displacement map", name);
-  return registry().create(name, params, ctx);
+  return RangeQueryRegistry::instance().create(name, params, ctx);
 }
 
-std::vector<std::string> rangeQueryNames() { return registry().names(); }
+std::vector<std::string> rangeQueryNames() { return RangeQueryRegistry::instance().names(); }
+const StrategyTraits& rangeQueryTraits(const std::string& name) { return RangeQueryRegistry::instance().traits(name); }
+
+nlohmann::json RangeQuery::describe() const {
+  nlohmann::json j = {{"name", std::string(name())},
+                      {"exact", exact()},
+                      {"bytes", bytes()},
+                      {"needs", {{"max_extent", {needs_.maxExtentX, needs_.maxExtentY}}, {"wrap", needs_.wrap}}}};
+  const nlohmann::json layout = describeLayout();
+  if (!layout.empty()) j["layout"] = layout;
+  return j;
+}
 
 Interval bruteForceRange(const HeightMap& m, const SampleRange& r) {
   const AxisPieces px = splitAxis(r.x0, r.x1, m.width()), py = splitAxis(r.y0, r.y1, m.height());

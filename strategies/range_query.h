@@ -6,15 +6,21 @@
 // range and each strategy bounds the raw texels over an integer, possibly wrapping,
 // sample range.
 //
-// Strategies are `final` classes deriving from RangeQueryImpl<Self>, which gives the
-// virtual entry points for extension and a non-virtual query() for the templated
-// traversal (no virtual call per step).
+// Strategies are `final` classes deriving from RangeQueryImpl<Self> and implementing
+// `Interval rawRangeFast(const SampleRange&) const`. The names are the same across the
+// three interfaces: query / rawRange (here), invert (Inverter) and split (Splitter) are
+// the virtual entry points every caller uses; the ...Fast forms are the strategies'
+// inline, non-virtual implementations, which a static traversal instantiation calls
+// directly (render/traversal/README.md: opt-in, kept only where a benchmark shows a gain).
+//
+// A strategy registers itself in its .cpp (core/registry.h):
+//     OBLONG_REGISTER_RANGE_QUERY("name", factory, StrategyTraits{...});
 #pragma once
 
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/memory.h"
-#include "core/params.h"
+#include "core/registry.h"
 
 #include <memory>
 #include <string>
@@ -51,18 +57,27 @@ class RangeQuery {
   virtual std::string_view name() const = 0;
   // Heights (scale and bias applied) over the micro-geometry on `uv`. Level of detail:
   // only lod 0 (the full-resolution micro-geometry) is defined; see docs/decisions.md.
-  virtual Interval queryVirtual(const Rect& uv, float lod = 0.0f) const = 0;
+  virtual Interval query(const Rect& uv, float lod = 0.0f) const = 0;
   // Raw texel bounds over a sample range: the strategy's core.
-  virtual Interval rawRangeVirtual(const SampleRange& r) const = 0;
+  virtual Interval rawRange(const SampleRange& r) const = 0;
   // Bytes of the strategy's own structures (not the map it reads).
   virtual size_t bytes() const = 0;
   virtual MemoryReport memory() const { return {{std::string(name()), bytes()}}; }
   // True when rawRange equals the brute-force range on every sample range.
   virtual bool exact() const = 0;
+  // What was built, for `oblong info` and --stats: name, exactness, bytes and the
+  // QueryNeeds it was built for; strategies add their own layout (describeLayout).
+  nlohmann::json describe() const;
 
   const Displacement& displacement() const { return disp_; }
   const HeightMap& map() const { return *disp_.map; }
   const QueryNeeds& needs() const { return needs_; }
+
+ protected:
+  // The strategy's own structure (levels, layers, deltas...); empty by default.
+  virtual nlohmann::json describeLayout() const { return nlohmann::json::object(); }
+
+ public:
 
   // Cells touched by the rectangle -> their corner samples. A tiny outward margin
   // keeps the snap conservative against rounding of uv * tiling * size.
@@ -83,21 +98,21 @@ class RangeQueryImpl : public RangeQuery {
  public:
   using RangeQuery::RangeQuery;
   // Non-virtual entry point for templated callers.
-  Interval query(const Rect& uv) const {
-    return disp_.toHeight(static_cast<const Self*>(this)->rawRange(snap(uv)));
+  Interval queryFast(const Rect& uv) const {
+    return disp_.toHeight(static_cast<const Self*>(this)->rawRangeFast(snap(uv)));
   }
-  Interval queryVirtual(const Rect& uv, float lod) const final;
-  Interval rawRangeVirtual(const SampleRange& r) const final {
-    return static_cast<const Self*>(this)->rawRange(r);
+  Interval query(const Rect& uv, float lod) const final;
+  Interval rawRange(const SampleRange& r) const final {
+    return static_cast<const Self*>(this)->rawRangeFast(r);
   }
 };
 
 void throwLodUnsupported(std::string_view strategy, float lod);
 
 template <typename Self>
-Interval RangeQueryImpl<Self>::queryVirtual(const Rect& uv, float lod) const {
+Interval RangeQueryImpl<Self>::query(const Rect& uv, float lod) const {
   if (lod != 0.0f) throwLodUnsupported(name(), lod);
-  return query(uv);
+  return queryFast(uv);
 }
 
 struct RangeQueryContext {
@@ -105,11 +120,13 @@ struct RangeQueryContext {
   QueryNeeds needs;
 };
 using RangeQueryRegistry = Registry<RangeQuery, RangeQueryContext>;
+#define OBLONG_REGISTER_RANGE_QUERY(name, ...) OBLONG_REGISTER(::oblong::RangeQueryRegistry, name, __VA_ARGS__)
 
 // Creates a strategy by name; unknown names and unused parameters throw oblong::Error.
 std::unique_ptr<RangeQuery> createRangeQuery(const std::string& name, ParamSet& params,
                                              const RangeQueryContext& ctx);
 std::vector<std::string> rangeQueryNames();
+const StrategyTraits& rangeQueryTraits(const std::string& name);
 
 // Helpers for strategies: one axis [a0,a1] of a sample range on a map axis of size n.
 // wrapAxis: the whole axis [0,n-1] when the extent is >= n; else the start wrapped into

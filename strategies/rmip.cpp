@@ -104,7 +104,7 @@ void Rmip::checkMemory(const HeightMap& m, const QueryNeeds& needs, const Option
                         L.f == 1 ? "" : fmt::format(" at {} samples per pixel", L.f), humanBytes(L.scratchBytes())));
 }
 
-Rmip::Rmip(const Displacement& d, const QueryNeeds& needs, const Options& o) : RangeQueryImpl(d, needs) {
+Rmip::Rmip(const Displacement& d, const QueryNeeds& needs, const Options& o) : RangeQueryImpl(d, needs), opt_(o) {
   const HeightMap& m = map();
   const int W = m.width(), H = m.height();
   checkMemory(m, needs, o);
@@ -172,13 +172,38 @@ Rmip::Rmip(const Displacement& d, const QueryNeeds& needs, const Options& o) : R
   }
 }
 
-void registerRmip(RangeQueryRegistry& r) {
-  r.add("rmip", [](ParamSet& ps, const RangeQueryContext& ctx) -> std::unique_ptr<RangeQuery> {
+nlohmann::json Rmip::describeLayout() const {
+  // Bytes of each built layer (p rows, q columns) and of the corners that wrap around
+  // the border (the same layout without them).
+  nlohmann::json bytes = nlohmann::json::array();
+  for (int p = 0; p <= P_; ++p) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int q = 0; q <= Q_; ++q) {
+      const Layer& l = layers_[size_t(p) * (Q_ + 1) + q];
+      row.push_back(size_t(l.nx) * size_t(l.ny) * sizeof(Interval));
+    }
+    bytes.push_back(std::move(row));
+  }
+  QueryNeeds inside = needs_;
+  inside.wrap = false;
+  const size_t noWrap = layout(map().width(), map().height(), inside, opt_).entries * sizeof(Interval);
+  const int fullP = int(std::bit_width(unsigned(rw_))) - 1, fullQ = int(std::bit_width(unsigned(rh_))) - 1;
+  return {{"pixels", {rw_, rh_}},
+          {"downsample", f_},
+          {"compression", c_},
+          {"layers", {P_ + 1, Q_ + 1}},
+          {"full_pyramid_layers", {fullP + 1, fullQ + 1}},
+          {"layer_bytes", bytes},
+          {"stores_wrap", wrap_},
+          {"wrap_bytes", wrap_ ? data_.size() * sizeof(Interval) - noWrap : 0}};
+}
+
+OBLONG_REGISTER_RANGE_QUERY("rmip", [](ParamSet& ps, const RangeQueryContext& ctx) -> std::unique_ptr<RangeQuery> {
     Rmip::Options o;
     o.resolution = ps.getInRange<int>("resolution", 0, 0, 1 << 24);
     o.compression = ps.getInRange<int>("compression", 1, 0, 1000);
     return std::make_unique<Rmip>(ctx.displacement, ctx.needs, o);
-  });
-}
+  },
+  StrategyTraits{false, "rectangular min-max image pyramid, exact bounds over any rectangle (Thonat et al. 2023, Sec. 5)"});
 
 }  // namespace oblong

@@ -81,8 +81,13 @@ class Rmip final : public RangeQueryImpl<Rmip> {
   int layersX() const { return P_ + 1; }  // p = 0..P
   int layersY() const { return Q_ + 1; }
   bool storesWrap() const { return wrap_; }
+  // Read-only view of the built pyramid, for copies of it (the Vulkan upload,
+  // render/vulkan/rmip_layout.h): the layer table, (p, q) at index p * layersY() + q for
+  // p < layersX(), q < layersY(), and the entries its offsets point into.
+  const std::vector<Layer>& layerTable() const { return layers_; }
+  const std::vector<Interval>& layerEntries() const { return data_; }
 
-  Interval rawRange(const SampleRange& r) const {
+  Interval rawRangeFast(const SampleRange& r) const {
     OBLONG_STAT_INC(rmipQueries);
     int x0, x1, y0, y1;
     toPixels(r.x0, r.x1, map().width(), rw_, x0, x1);
@@ -97,6 +102,9 @@ class Rmip final : public RangeQueryImpl<Rmip> {
       for (int a = 0; a < (x1 < rw_ ? 1 : 2); ++a) out.extend(block(xa[a], xb[a], ya[b], yb[b]));
     return out;
   }
+
+ protected:
+  nlohmann::json describeLayout() const override;
 
  private:
   // Sample axis range -> RMIP pixel range: start in [0,n), end possibly >= n (crossing
@@ -138,6 +146,7 @@ class Rmip final : public RangeQueryImpl<Rmip> {
     return out;
   }
 
+  Options opt_;
   int f_ = 1, rw_ = 0, rh_ = 0, P_ = 0, Q_ = 0, c_ = 0;
   bool wrap_ = false;
   std::vector<Layer> layers_;  // (P+1) x (Q+1), index p * (Q+1) + q

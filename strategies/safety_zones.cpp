@@ -113,14 +113,13 @@ SafetyZones::SafetyZones(const Displacement& disp, const QueryNeeds& needs, std:
   }
 }
 
-void registerSafetyZones(RangeQueryRegistry& r) {
-  r.add("safety_zones", [](ParamSet& ps, const RangeQueryContext& ctx) -> std::unique_ptr<RangeQuery> {
+OBLONG_REGISTER_RANGE_QUERY("safety_zones", [](ParamSet& ps, const RangeQueryContext& ctx) -> std::unique_ptr<RangeQuery> {
     auto deltas = ps.get<std::vector<int>>("deltas", {});
     for (int d : deltas)
       if (d < 0 || d > (1 << 24)) fail(ps.where(), "parameter 'deltas' has a bad value {}", d);
     if (ps.has("deltas") && deltas.empty()) fail(ps.where(), "parameter 'deltas' is an empty list");
     return std::make_unique<SafetyZones>(ctx.displacement, ctx.needs, std::move(deltas));
-  });
-}
+  },
+  StrategyTraits{false, "dilation and erosion maps for a few box radii (Kolb & Rezk-Salama, safety zones, Sec. 3.2)"});
 
 }  // namespace oblong

@@ -46,7 +46,7 @@ class SafetyZones final : public RangeQueryImpl<SafetyZones> {
   bool exact() const override { return false; }
   const std::vector<int>& deltas() const { return deltas_; }
 
-  Interval rawRange(const SampleRange& r) const {
+  Interval rawRangeFast(const SampleRange& r) const {
     OBLONG_STAT_INC(szQueries);
     const int W = map().width(), H = map().height();
     int x0, x1, y0, y1;
@@ -59,6 +59,12 @@ class SafetyZones final : public RangeQueryImpl<SafetyZones> {
         return data_[k * size_t(W) * H + size_t(cy >= H ? cy - H : cy) * W + (cx >= W ? cx - W : cx)];
     OBLONG_STAT_INC(szGlobal);
     return global_;
+  }
+
+ protected:
+  nlohmann::json describeLayout() const override {
+    return {{"deltas", deltas_}, {"zone_bytes", size_t(map().width()) * map().height() * sizeof(Interval)},
+            {"stores_wrap", false}};
   }
 
  private:

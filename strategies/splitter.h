@@ -23,13 +23,14 @@
 //   quadtree    strategies/quadtree.h    node-aligned splits of the min-max mipmap grid
 //                                        (TFDM, Thonat et al. 2021), no inversion
 //
-// Concrete strategies are `final` classes deriving from SplitterImpl<Self>: splitVirtual
-// is the virtual entry point; Self::splitFast<Ctx> is an inline template the templated
-// traversal calls with its concrete (final) context, so no virtual call remains per step.
+// Concrete strategies are `final` classes deriving from SplitterImpl<Self>: split() is the
+// virtual entry point; Self::splitFast<Ctx> is the inline template a static traversal
+// instantiation calls with its concrete (final) context. A strategy registers itself in
+// its .cpp: OBLONG_REGISTER_SPLITTER("name", factory, StrategyTraits{...}).
 #pragma once
 
 #include "core/math.h"
-#include "core/params.h"
+#include "core/registry.h"
 
 #include <memory>
 #include <string>
@@ -74,14 +75,13 @@ class Splitter {
   virtual std::string_view name() const = 0;
   // Splits `piece` into front and back. False: this splitter could not split it (the
   // traversal then subdivides the piece's rectangle without the curve).
-  virtual bool splitVirtual(const CurvePiece& piece, SplitContext& ctx, CurvePiece& front,
-                            CurvePiece& back) const = 0;
+  virtual bool split(const CurvePiece& piece, SplitContext& ctx, CurvePiece& front, CurvePiece& back) const = 0;
 };
 
 template <typename Self>
 class SplitterImpl : public Splitter {
  public:
-  bool splitVirtual(const CurvePiece& piece, SplitContext& ctx, CurvePiece& front, CurvePiece& back) const final {
+  bool split(const CurvePiece& piece, SplitContext& ctx, CurvePiece& front, CurvePiece& back) const final {
     return static_cast<const Self*>(this)->splitFast(piece, ctx, front, back);
   }
 };
@@ -123,11 +123,12 @@ inline bool middleCrossing(const CurvePiece& p, Ctx& ctx, CurvePoint& m) {
 
 struct SplitterContext {};
 using SplitterRegistry = Registry<Splitter, SplitterContext>;
+#define OBLONG_REGISTER_SPLITTER(name, ...) OBLONG_REGISTER(::oblong::SplitterRegistry, name, __VA_ARGS__)
 
 // Creates a splitter by name; unknown names and unused parameters throw oblong::Error.
 std::unique_ptr<Splitter> createSplitter(const std::string& name, ParamSet& params);
 std::unique_ptr<Splitter> createSplitter(const std::string& name);
 std::vector<std::string> splitterNames();
-SplitterRegistry& splitterRegistry();  // with midpoint2d, midpoint3d and quadtree registered
+const StrategyTraits& splitterTraits(const std::string& name);
 
 }  // namespace oblong

@@ -50,6 +50,12 @@ TEST_CASE("oblong render writes an image and statistics for the default scene", 
   CHECK(j.at("rays").at("primary") == 64 * 48);
   CHECK(j.at("memory").at("embree/bvh").get<int64_t>() > 0);
   CHECK(j.at("rays").at("hits").get<int64_t>() > 64 * 48 / 4);
+  // Which code path ran, with every strategy's resolved parameters (defaults included).
+  const auto& t = j.at("traversal").at(0);
+  CHECK(t.at("path") == "generic");
+  CHECK(t.at("range").at("params").at("compression") == 1);
+  CHECK(t.at("inverter").at("params").at("max_iterations") == 10);
+  CHECK(t.at("range").at("layout").at("layers").size() == 2);
 }
 
 TEST_CASE("oblong info reports the range-query structures built for the scene", "[cli]") {
@@ -67,13 +73,16 @@ TEST_CASE("oblong info reports the range-query structures built for the scene", 
     CHECK(has(r.out, "LoD      : no levels built"));
     CHECK(has(r.out, "total    : "));
   }
+  // Each strategy's describe(): its layout, resolved parameters and the code path.
   const Run r = run("info --range rmip");
-  CHECK(has(r.out, "layers   : (p, q) for p 0..5, q 0..4: 30 layers of the 81 a full pyramid has"));
-  CHECK(has(r.out, "p=5     48.0 KiB   48.0 KiB   24.0 KiB   12.0 KiB    6.0 KiB"));
-  CHECK(!has(r.out, "breakdown unavailable"));  // the per-layer bytes add up to the built layers
-  CHECK(has(r.out, "wrap     : corners wrapping around the map border stored"));
-  CHECK(has(run("info --range minmax_mipmap").out, "level 6  : 6x4 nodes, 192 B"));
-  CHECK(has(run("info --range safety_zones").out, "zones    : deltas [1, 2, 4, 8, 16, 32]"));
+  CHECK(has(r.out, "layers              : [6, 5]"));
+  CHECK(has(r.out, "full_pyramid_layers : [9, 9]"));
+  CHECK(has(r.out, "  5    48.0 KiB   48.0 KiB   24.0 KiB   12.0 KiB    6.0 KiB"));
+  CHECK(has(r.out, "wrap     : corners wrapping around the map border stored: 63.8 KiB of it"));
+  CHECK(has(r.out, R"(({"compression":1,"resolution":0}))"));
+  CHECK(has(r.out, "traversal: generic path; inverter newton"));
+  CHECK(has(run("info --range minmax_mipmap").out, "level_sizes         : [[192, 128], [96, 64], [48, 32], [24, 16], [12, 8], [6, 4]]"));
+  CHECK(has(run("info --range safety_zones").out, "deltas              : [1, 2, 4, 8, 16, 32]"));
 }
 
 TEST_CASE("oblong info: wrap corners only when some query crosses the map border", "[cli]") {

@@ -17,6 +17,7 @@
 #include "render/intersector.h"
 #include "strategies/range_query.h"
 #include "inversion/inverter.h"
+#include "tests/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
@@ -191,33 +192,6 @@ Scene torusScene() {
   return s;
 }
 
-std::vector<TraversalConfig> allConfigs() {
-  std::vector<TraversalConfig> out;
-  for (const auto& range : rangeQueryNames())
-    for (const std::string inverter : {"newton", "cubic"})
-      for (const std::string splitter : {"midpoint2d", "midpoint3d", "quadtree"}) {
-        TraversalConfig c;
-        c.range = range, c.inverter = inverter, c.splitter = splitter;
-        out.push_back(c);
-      }
-  // The canonical configuration without inversion in traversal, with marching off
-  // (subdivide down to single cells) and with marching everywhere.
-  TraversalConfig c;
-  c.inversionInTraversal = false;
-  out.push_back(c);
-  c = TraversalConfig{};
-  c.marchingScale = 1.0f;
-  out.push_back(c);
-  c = TraversalConfig{};
-  c.marchingScale = 1e6f;
-  out.push_back(c);
-  // The TFDM configuration.
-  c = TraversalConfig{};
-  c.range = "minmax_mipmap", c.splitter = "quadtree", c.inversionInTraversal = false;
-  out.push_back(c);
-  return out;
-}
-
 std::string label(const TraversalConfig& c) {
   return fmt::format("{}+{}+{} ms={} inv={}{}", c.range, c.inverter, c.splitter, c.marchingScale,
                      c.inversionInTraversal, c.baseline.empty() ? "" : " baseline=" + c.baseline);
@@ -242,16 +216,21 @@ void runConformance(const Scene& s, int count) {
     INFO(m.first);
     CHECK(m.count == 0);
   }
-  for (const TraversalConfig& cfg : allConfigs()) {
+  for (const auto& [cfg, slow] : test::conformanceConfigs()) {
     const EmbreeScene test(s, AccelOptions{.tessellate = false, .traversal = cfg});
     for (size_t k = 0; k < families.size(); ++k) {
       const auto& f = families[k];
-      const std::vector<Hit> got = traceAll(test, f.rays);
-      INFO(s.path << ": " << label(cfg) << ", " << f.name << " (" << f.rays.size() << " rays)");
-      const Mismatch mt = compare(tessHits[k], got, f.rays, diag);
+      // Slow references (ceres) on every kSlowStride-th ray.
+      std::vector<Ray> rays;
+      std::vector<Hit> tessRef, bruteRef;
+      for (size_t i = 0; i < f.rays.size(); i += slow ? test::kSlowStride : 1)
+        rays.push_back(f.rays[i]), tessRef.push_back(tessHits[k][i]), bruteRef.push_back(bruteHits[k][i]);
+      const std::vector<Hit> got = traceAll(test, rays);
+      INFO(s.path << ": " << label(cfg) << ", " << f.name << " (" << rays.size() << " rays)");
+      const Mismatch mt = compare(tessRef, got, rays, diag);
       INFO("vs tessellated: " << mt.first);
       CHECK(mt.count == 0);
-      const Mismatch mb = compare(bruteHits[k], got, f.rays, diag);
+      const Mismatch mb = compare(bruteRef, got, rays, diag);
       INFO("vs bruteforce: " << mb.first);
       CHECK(mb.count == 0);
     }

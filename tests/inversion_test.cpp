@@ -22,7 +22,6 @@ using nlohmann::json;
 namespace {
 
 std::unique_ptr<Inverter> make(const std::string& name, json j = json::object()) {
-  registerCeresInverter();
   ParamSet ps(std::move(j), "test");
   return createInverter(name, ps);
 }
@@ -65,7 +64,6 @@ std::vector<StiffCase> syntheticCases(int n, uint32_t seed) { return randomCases
 }  // namespace
 
 TEST_CASE("inverter registry: names, parameters, errors", "[inversion]") {
-  registerCeresInverter();
   const auto names = inverterNames();
   CHECK(std::count(names.begin(), names.end(), "newton") == 1);
   CHECK(std::count(names.begin(), names.end(), "cubic") == 1);
@@ -189,7 +187,6 @@ TEST_CASE("inversion: statistics counters use the strategy name", "[inversion][n
 // <= 1e-6, inside T within 1e-9, converged). Float API: no failure except the causes
 // documented in docs/inversion.md, which are bounded instead.
 TEST_CASE("inversion: stiff and extreme cases", "[inversion][newton][cubic][ceres]") {
-  registerCeresInverter();
   CeresInverter ceres;
   const auto newton = make("newton");
   const auto cubic = make("cubic");

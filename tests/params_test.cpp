@@ -1,4 +1,5 @@
 #include "core/params.h"
+#include "core/registry.h"
 
 #include <catch2/catch.hpp>
 
@@ -40,4 +41,11 @@ TEST_CASE("Registry creates by name; unknown names list the known ones", "[param
   REQUIRE_THROWS_WITH(reg.create("plus", extra, Ctx{}), Catch::Contains("unknown parameter 'typo'"));
   ParamSet none;
   REQUIRE_THROWS_WITH(reg.create("minus", none, Ctx{}), Catch::Contains("'minus'") && Catch::Contains("plus"));
+  // The parameters a strategy read, with the defaults it used.
+  ParamSet given(nlohmann::json{{"n", 4}}, "here");
+  reg.create("plus", given, Ctx{});
+  CHECK(given.resolved() == nlohmann::json{{"n", 4}});
+  ParamSet defaults;
+  reg.create("plus", defaults, Ctx{});
+  CHECK(defaults.resolved() == nlohmann::json{{"n", 1}});
 }

@@ -154,7 +154,7 @@ TEST_CASE("every range query strategy is conservative, and exact where it claims
                                                needs.maxExtentY, needs.wrap, disp.scale, disp.bias,
                                                disp.tiling.x, disp.tiling.y);
           for (size_t k = 0; k < rects.size(); ++k) {
-            const Interval q = rq->queryVirtual(rects[k], 0.0f);
+            const Interval q = rq->query(rects[k], 0.0f);
             if (!q.contains(truths[k]) || q.isEmpty()) {
               const SampleRange s = rq->snap(rects[k]);
               CAPTURE(what, k, rects[k].lo.x, rects[k].lo.y, rects[k].hi.x, rects[k].hi.y, s.x0, s.x1, s.y0,
@@ -171,7 +171,7 @@ TEST_CASE("every range query strategy is conservative, and exact where it claims
           }
           for (size_t k = 0; k < ranges.size(); ++k) {
             const SampleRange& r = ranges[k];
-            const Interval q = rq->rawRangeVirtual(r);
+            const Interval q = rq->rawRange(r);
             const bool ok = rq->exact() ? q == rawTruths[k] : q.contains(rawTruths[k]);
             if (!ok || q.isEmpty()) {
               CAPTURE(what, rq->exact(), r.x0, r.x1, r.y0, r.y1, q.lo, q.hi, rawTruths[k].lo, rawTruths[k].hi);
@@ -217,8 +217,8 @@ TEST_CASE("range query names and parameters are validated", "[range_query]") {
   CHECK_NOTHROW(make("rmip", {{"resolution", 8}, {"compression", 2}}));
   // Only lod 0 is defined.
   auto rq = make("rmip", json::object());
-  CHECK_THROWS_AS(rq->queryVirtual(Rect{vec2(0.1f), vec2(0.2f)}, 1.5f), Error);
-  CHECK_NOTHROW(rq->queryVirtual(Rect{vec2(0.1f), vec2(0.2f)}, 0.0f));
+  CHECK_THROWS_AS(rq->query(Rect{vec2(0.1f), vec2(0.2f)}, 1.5f), Error);
+  CHECK_NOTHROW(rq->query(Rect{vec2(0.1f), vec2(0.2f)}, 0.0f));
 }
 
 TEST_CASE("range queries build only what the scene needs (invariant 4)", "[range_query][rmip]") {

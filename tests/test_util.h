@@ -4,10 +4,14 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,6 +21,26 @@ inline std::filesystem::path scratchDir(const std::string& name) {
   auto p = std::filesystem::temp_directory_path() / ("oblong_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::create_directories(p);
   return p;
+}
+
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// Runs the oblong binary with `args` (a shell command line tail), capturing both streams.
+struct CliRun {
+  int status;
+  std::string out, err;
+};
+inline CliRun runOblongCli(const std::string& args) {
+  const auto dir = scratchDir("cli_run");
+  const auto o = dir / "stdout.txt", e = dir / "stderr.txt";
+  const std::string cmd = std::string(OBLONG_BINARY) + " " + args + " >" + o.string() + " 2>" + e.string();
+  const int raw = std::system(cmd.c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(o), slurp(e)};
 }
 
 // Writes a single-channel image from float values in [0,1] (or any, for float files).

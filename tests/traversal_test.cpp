@@ -20,6 +20,8 @@
 #include "strategies/quadtree.h"
 #include "strategies/splitter.h"
 
+#include "tests/traversal_cases.h"
+
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
@@ -29,234 +31,14 @@
 #include <random>
 
 using namespace oblong;
+using namespace oblong::test;
 
 namespace {
-
-struct Scenario {
-  std::string name;
-  std::vector<DisplacedTriangle> tris;
-  Displacement disp;
-};
-
-std::vector<DisplacedTriangle> trianglesOf(const Mesh& m) {
-  std::vector<DisplacedTriangle> t;
-  for (size_t i = 0; i < m.triangles.size(); ++i) t.push_back(m.triangle(i));
-  return t;
-}
-
-Scenario tiledQuad() {  // flat, high-frequency map tiled 4x4: deep hierarchies
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(32, 32, 3));
-  return {"tiled quad", trianglesOf(quadMesh(1.0f, 0.0f, 2)), Displacement{map, 0.1f, -0.5f, vec2(4.0f, 4.0f)}};
-}
-Scenario torus() {  // curved, odd map sizes, tiled (3,2)
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(61, 47, 9));
-  return {"torus", trianglesOf(torusMesh(1.0f, 0.4f, 16, 8)), Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)}};
-}
-Scenario coarseTorus() {  // big curved triangles, strong displacement: large bulge / ε
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(96, 48, 4));
-  return {"coarse torus", trianglesOf(torusMesh(1.0f, 0.45f, 8, 6)), Displacement{map, 0.2f, -0.4f, vec2(2.0f, 1.0f)}};
-}
-Scenario sphere() {  // sphere-like, normals converging to the centre
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 40, 11));
-  return {"sphere", trianglesOf(sphereMesh(1.0f, 12, 8)), Displacement{map, 0.12f, -0.5f, vec2(4.0f, 2.0f)}};
-}
-
-// Stiff cases: strongly twisted vertex normals, a sphere displaced towards its centre
-// (normals converging within the shell), 10x tiling (tens of thousands of cells per
-// triangle), a quad 1e4 away from the origin, and rotated, mirrored, negative uvs.
-Scenario twisted() {
-  std::mt19937 rng(23);
-  std::uniform_real_distribution<float> W(-0.5f, 0.5f);
-  Mesh m = quadMesh(1.0f, 0.0f, 3);
-  for (vec3& n : m.normals) n = glm::normalize(vec3(W(rng), 1.0f, W(rng)));
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(48, 48, 7));
-  return {"twisted", trianglesOf(m), Displacement{map, 0.15f, -0.5f, vec2(2.0f, 2.0f)}};
-}
-Scenario deepSphere() {
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 32, 5));
-  return {"deep sphere", trianglesOf(sphereMesh(1.0f, 10, 6)), Displacement{map, 0.6f, -1.0f, vec2(2.0f, 1.0f)}};
-}
-Scenario highTiling() {
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(23, 19, 8));
-  return {"10x tiling", trianglesOf(quadMesh(1.0f, 0.0f, 1)), Displacement{map, 0.03f, -0.5f, vec2(10.0f, 11.0f)}};
-}
-Scenario farAway() {
-  Mesh m = quadMesh(1.0f, 0.0f, 2);
-  for (vec3& p : m.positions) p += vec3(1e4f, -3e3f, 2e4f);
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(32, 32, 6));
-  return {"far from the origin", trianglesOf(m), Displacement{map, 0.1f, -0.5f, vec2(3.0f, 3.0f)}};
-}
-
-Scenario rotatedUVs() {  // mirrored, rotated, negative uvs: the grid is not aligned with T
-  Mesh m = quadMesh(1.0f, 0.0f, 2);
-  const float c = std::cos(0.5f), sn = std::sin(0.5f);
-  for (vec2& uv : m.uvs) uv = vec2(-1.3f + 1.7f * (c * uv.x - sn * uv.y), 0.4f - 1.1f * (sn * uv.x + c * uv.y));
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(29, 35, 12));
-  return {"rotated mirrored uvs", trianglesOf(m), Displacement{map, 0.08f, -0.5f, vec2(2.0f, 3.0f)}};
-}
-
-std::vector<Scenario> scenarios() { return {tiledQuad(), torus(), coarseTorus(), sphere()}; }
-std::vector<Scenario> stiffScenarios() { return {twisted(), deepSphere(), highTiling(), farAway(), rotatedUVs()}; }
 
 TraversalConfig config(const std::string& range, const std::string& inv, const std::string& split) {
   TraversalConfig c;
   c.range = range, c.inverter = inv, c.splitter = split;
   return c;
-}
-
-std::string describe(const TraversalConfig& c) {
-  if (!c.baseline.empty()) return c.baseline;
-  return fmt::format("{}+{}+{} (march {}, inversion {}{}{})", c.range, c.inverter, c.splitter, c.marchingScale,
-                     c.inversionInTraversal ? "on" : "off", c.rangeParams.empty() ? "" : ", range ",
-                     c.rangeParams.empty() ? "" : c.rangeParams.dump());
-}
-
-// Every registered combination, plus the variants that change the traversal's shape.
-std::vector<TraversalConfig> allConfigs() {
-  registerCeresInverter();
-  std::vector<TraversalConfig> out;
-  for (const auto& r : rangeQueryNames())
-    for (const std::string inv : {"newton", "cubic"})
-      for (const auto& s : splitterNames()) out.push_back(config(r, inv, s));
-  TraversalConfig c = config("rmip", "newton", "midpoint2d");
-  c.inversionInTraversal = false;
-  out.push_back(c);
-  c = config("rmip", "newton", "midpoint2d");
-  c.marchingScale = 1.0f;
-  out.push_back(c);
-  c.marchingScale = 0.5f;
-  out.push_back(c);
-  c.marchingScale = 16.0f;
-  out.push_back(c);
-  c = config("minmax_mipmap", "newton", "quadtree");  // the TFDM configuration
-  c.inversionInTraversal = false;
-  c.marchingScale = 1.0f;
-  out.push_back(c);
-  c = config("rmip", "newton", "midpoint2d");
-  c.rangeParams = {{"resolution", 8}, {"compression", 0}};
-  out.push_back(c);
-  c = config("rmip", "ceres", "midpoint2d");  // the generic (virtual) instantiation
-  out.push_back(c);
-  return out;
-}
-
-vec3 randomDir(std::mt19937& rng) {
-  std::normal_distribution<float> G;
-  vec3 d;
-  do d = vec3(G(rng), G(rng), G(rng));
-  while (glm::length(d) < 1e-3f);
-  return glm::normalize(d);
-}
-
-struct SurfacePoint {
-  vec3 p, n;
-  uint32_t prim;
-};
-SurfacePoint randomBasePoint(const Scenario& s, std::mt19937& rng) {
-  std::uniform_int_distribution<size_t> tri(0, s.tris.size() - 1);
-  std::uniform_real_distribution<float> U(0.0f, 1.0f);
-  const size_t k = tri(rng);
-  const DisplacedTriangle& T = s.tris[k];
-  float u = U(rng), v = U(rng);
-  if (u + v > 1) u = 1 - u, v = 1 - v;
-  return {T.P(u, v), glm::normalize(T.N(u, v)), uint32_t(k)};
-}
-
-struct RayCase {
-  Ray r;
-  int family;
-};
-const char* kFamilies[] = {"camera", "grazing", "along +-N", "inside the shell", "spawned (path tracer)",
-                           "shadow (finite tmax)"};
-
-// Closest hit over all triangles (AABB-filtered) with a given intersector.
-bool closest(const Intersector& is, const Ray& r, TriangleHit& best) {
-  bool found = false;
-  Ray q = r;
-  RayCounters c;
-  for (uint32_t p = 0; p < is.size(); ++p) {
-    const AABB b = is.bounds(p);
-    if (b.isEmpty() || b.intersect(q).isEmpty()) continue;
-    TriangleHit h;
-    if (is.intersect(q, p, h, c) && h.t <= q.tmax) found = true, best = h, q.tmax = h.t;
-  }
-  return found;
-}
-
-std::vector<RayCase> rayFamilies(const Scenario& s, const Intersector& bf, int count, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> U(0.0f, 1.0f);
-  AABB box;
-  for (uint32_t p = 0; p < bf.size(); ++p) box.extend(bf.bounds(p));
-  const vec3 c = 0.5f * (box.lo + box.hi);
-  const float diag = glm::length(box.extent());
-  const float hmax = std::max(std::abs(s.disp.scale * s.disp.bias), std::abs(s.disp.scale * (1 + s.disp.bias)));
-  std::vector<RayCase> out;
-  std::vector<Ray> camera;
-  for (int i = 0; i < count; ++i) {
-    {  // camera: from outside towards a random point on the base surface
-      const vec3 o = c + 1.5f * diag * randomDir(rng);
-      const SurfacePoint sp = randomBasePoint(s, rng);
-      const vec3 target = sp.p + (U(rng) - 0.5f) * 2.0f * hmax * sp.n;
-      camera.push_back(Ray{o, glm::normalize(target - o), 0.0f, kInfinity});
-      out.push_back({camera.back(), 0});
-    }
-    {  // grazing: within a few degrees of the tangent plane
-      const SurfacePoint sp = randomBasePoint(s, rng);
-      vec3 t = glm::cross(sp.n, randomDir(rng));
-      if (glm::length(t) < 1e-3f) t = glm::cross(sp.n, vec3(1, 0, 0));
-      const float tilt = (U(rng) - 0.5f) * (i % 2 ? 0.02f : 0.2f);
-      const vec3 d = glm::normalize(glm::normalize(t) + tilt * sp.n);
-      const vec3 target = sp.p + (U(rng) - 0.5f) * 2.0f * hmax * sp.n;
-      out.push_back({Ray{target - 0.6f * diag * d, d, 0.0f, kInfinity}, 1});
-    }
-    {  // along +-N: the interpolated normal itself, from above, below or inside
-      const SurfacePoint sp = randomBasePoint(s, rng);
-      const float side = U(rng) < 0.5f ? 1.0f : -1.0f;
-      const float start = (i % 3 == 0) ? (U(rng) * 2 - 1) * hmax : side * 3.0f * hmax;
-      out.push_back({Ray{sp.p + start * sp.n, -side * sp.n, 0.0f, kInfinity}, 2});
-    }
-    {  // inside the shell, random direction
-      const SurfacePoint sp = randomBasePoint(s, rng);
-      const vec3 o = sp.p + (U(rng) * 2.0f - 1.0f) * 1.2f * hmax * sp.n;
-      out.push_back({Ray{o, randomDir(rng), 0.0f, kInfinity}, 3});
-    }
-  }
-  // Directions that are not unit length (Embree does not normalise) and axis-aligned
-  // ones (slab tests with infinite reciprocals), mixed into the camera family.
-  for (int i = 0; i < count / 4; ++i) {
-    Ray r = camera[size_t(i) % camera.size()];
-    r.d *= (i % 2) ? 7.5f : 0.02f;
-    out.push_back({r, 0});
-    const SurfacePoint sp = randomBasePoint(s, rng);
-    vec3 d(0.0f);
-    d[i % 3] = (i / 3) % 2 ? 1.0f : -1.0f;
-    out.push_back({Ray{sp.p - 2.0f * hmax * d - (0.5f * diag) * d, d, 0.0f, kInfinity}, 0});
-    // From far away (beyond the origin budget of the precomputed prisms: rebuilt per ray).
-    const vec3 far = c + 1000.0f * diag * randomDir(rng);
-    const vec3 target = randomBasePoint(s, rng).p;
-    out.push_back({Ray{far, glm::normalize(target - far), 0.0f, kInfinity}, 0});
-  }
-  // Spawned from the oracle's hits of the camera rays: exactly at the hit with a small
-  // tmin, or offset along the facing normal; into the hemisphere; plus shadow rays
-  // towards a point with a finite tmax.
-  int k = 0;
-  for (const Ray& r : camera) {
-    TriangleHit h;
-    if (!closest(bf, r, h)) continue;
-    vec3 n = h.ng;
-    if (glm::dot(n, r.d) > 0) n = -n;
-    const vec3 p = r.at(h.t);
-    vec3 d = randomDir(rng);
-    if (glm::dot(d, n) < 0) d = -d;
-    const float eps = 1e-4f * std::max(1.0f, glm::length(p));
-    if (k++ % 2) out.push_back({Ray{p + eps * n, d, 0.0f, kInfinity}, 4});
-    else out.push_back({Ray{p, d, eps, kInfinity}, 4});
-    const vec3 light = c + 1.2f * diag * randomDir(rng);
-    const vec3 L = light - p;
-    out.push_back({Ray{p + eps * n, glm::normalize(L), 0.0f, glm::length(L) * (0.3f + 0.7f * U(rng))}, 5});
-  }
-  return out;
 }
 
 // Brute-force results per (ray, triangle) whose prism box the ray meets.
@@ -291,10 +73,12 @@ struct Outcome {
   double seconds = 0;
 };
 
-Outcome conformance(const Intersector& is, const std::vector<RayCase>& rays, const std::vector<Reference>& ref) {
+Outcome conformance(const Intersector& is, const std::vector<RayCase>& rays, const std::vector<Reference>& ref,
+                    int stride) {
   Outcome o;
   const auto start = std::chrono::steady_clock::now();
-  for (const Reference& x : ref) {
+  for (size_t k = 0; k < ref.size(); k += size_t(stride)) {
+    const Reference& x = ref[k];
     const Ray& r = rays[x.ray].r;
     TriangleHit h;
     const bool hit = is.intersect(r, x.prim, h, o.counters);
@@ -313,7 +97,7 @@ Outcome conformance(const Intersector& is, const std::vector<RayCase>& rays, con
 }
 
 void runConformance(const std::vector<Scenario>& list, int count, bool verbose) {
-  const auto configs = allConfigs();
+  const auto configs = conformanceConfigs();
   for (const Scenario& s : list) {
     TraversalConfig bfc;
     bfc.baseline = "bruteforce";
@@ -326,9 +110,9 @@ void runConformance(const std::vector<Scenario>& list, int count, bool verbose) 
                      hits));
     REQUIRE(hits > ref.size() / 20);  // the families do hit the surface
     const auto t0 = std::chrono::steady_clock::now();
-    for (const TraversalConfig& c : configs) {
+    for (const auto& [c, slow] : configs) {
       const auto is = createIntersector(c, s.tris, s.disp);
-      const Outcome o = conformance(*is, rays, ref);
+      const Outcome o = conformance(*is, rays, ref, slow ? kSlowStride : 1);
       if (verbose)
         fmt::print("  {:<14} {:<60} {:>7} pairs {:>6} hits {:>8.2f} us/pair  steps/pair {:.1f}  mismatches {}\n",
                    s.name, describe(c), o.pairs, o.hits, 1e6 * o.seconds / std::max<size_t>(o.pairs, 1),

@@ -233,7 +233,6 @@ void stiffReport() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  registerCeresInverter();
   for (int i = 1; i < argc; ++i)
     if (std::strcmp(argv[i], "--stiff-report") == 0) {
       stiffReport();

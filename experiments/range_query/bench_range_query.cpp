@@ -7,11 +7,9 @@
 // Counters per (strategy, aspect, side): ratio = mean (hi-lo)/(exact hi - exact lo) over
 // rectangles with a non-zero exact range, excess = mean (hi-lo) - exact width (height
 // units, map in [-1,1]), MB = structure size, build_ms = build time. The timed loop
-// calls the non-virtual query() of the concrete class, as the templated traversal does.
-#include "strategies/minmax_mipmap.h"
+// calls the virtual query(), as the traversal does. Every registered strategy is timed
+// with its default parameters, plus rmip's parameter variants.
 #include "strategies/range_query.h"
-#include "strategies/rmip.h"
-#include "strategies/safety_zones.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
@@ -58,20 +56,24 @@ struct Built {
 };
 
 struct Variant {
-  const char* label;
-  const char* name;
-  const char* params;
+  std::string label, name, params;
 };
-const Variant kVariants[] = {
-    {"rmip", "rmip", "{}"},
-    {"rmip_c0", "rmip", R"({"compression":0})"},
-    {"rmip_c2", "rmip", R"({"compression":2})"},
-    {"rmip_uncompressed", "rmip", R"({"compression":99})"},
-    {"rmip_half_res", "rmip", R"({"resolution":512})"},
-    {"rmip_quarter_res", "rmip", R"({"resolution":256})"},
-    {"minmax_mipmap", "minmax_mipmap", "{}"},
-    {"safety_zones", "safety_zones", "{}"},
-};
+// Every registered strategy (defaults), then rmip's compression and resolution variants.
+const std::vector<Variant>& variants() {
+  static const std::vector<Variant> v = [] {
+    std::vector<Variant> out;
+    for (const std::string& n : rangeQueryNames()) out.push_back({n, n, "{}"});
+    if (RangeQueryRegistry::instance().has("rmip")) {
+      out.push_back({"rmip_c0", "rmip", R"({"compression":0})"});
+      out.push_back({"rmip_c2", "rmip", R"({"compression":2})"});
+      out.push_back({"rmip_uncompressed", "rmip", R"({"compression":99})"});
+      out.push_back({"rmip_half_res", "rmip", R"({"resolution":512})"});
+      out.push_back({"rmip_quarter_res", "rmip", R"({"resolution":256})"});
+    }
+    return out;
+  }();
+  return v;
+}
 
 // One build per variant, kept for all rectangle sets (uncompressed rmip is ~1 GB).
 Built& built(const Variant& v) {
@@ -116,28 +118,21 @@ const RectSet& rectSet(int aspect, int side) {
   return cache[key] = std::move(s);
 }
 
-template <typename T>
-void timedLoop(benchmark::State& st, const T& rq, const std::vector<Rect>& rects) {
-  size_t k = 0;
-  for (auto _ : st) {
-    benchmark::DoNotOptimize(rq.query(rects[k]));
-    k = (k + 1) & (kRects - 1);
-  }
-}
 
 void BM_Query(benchmark::State& st, const Variant* v, int aspect, int side) {
   Built& b = built(*v);
   const RectSet& s = rectSet(aspect, side);
   const RangeQuery& rq = *b.rq;
-  if (auto* p = dynamic_cast<const Rmip*>(&rq)) timedLoop(st, *p, s.rects);
-  else if (auto* p = dynamic_cast<const MinMaxMipmap*>(&rq)) timedLoop(st, *p, s.rects);
-  else if (auto* p = dynamic_cast<const SafetyZones*>(&rq)) timedLoop(st, *p, s.rects);
-  else for (auto _ : st) benchmark::DoNotOptimize(rq.queryVirtual(s.rects[0], 0.0f));
+  size_t n = 0;
+  for (auto _ : st) {
+    benchmark::DoNotOptimize(rq.query(s.rects[n], 0.0f));
+    n = (n + 1) & (kRects - 1);
+  }
 
   double ratio = 0, excess = 0;
   int nRatio = 0;
   for (size_t k = 0; k < s.rects.size(); ++k) {
-    const Interval q = rq.queryVirtual(s.rects[k], 0.0f), e = s.exact[k];
+    const Interval q = rq.query(s.rects[k], 0.0f), e = s.exact[k];
     if (!q.contains(e)) st.SkipWithError("bound does not contain the exact range");
     excess += q.width() - e.width();
     if (e.width() > 0) ratio += q.width() / e.width(), ++nRatio;
@@ -162,7 +157,7 @@ void BM_BuildRmip4096(benchmark::State& st) {
 }
 
 const int reg = [] {
-  for (const Variant& v : kVariants)
+  for (const Variant& v : variants())
     for (int aspect : {1, 8, 64})
       for (int side : {4, 16, 64, 256})
         benchmark::RegisterBenchmark(fmt::format("query/{}/aspect:{}/side:{}", v.label, aspect, side).c_str(),

@@ -1,0 +1,66 @@
+#include "render/strategy_catalog.h"
+
+#include "inversion/inverter.h"
+#include "strategies/range_query.h"
+#include "strategies/splitter.h"
+
+namespace oblong {
+
+std::vector<std::string> strategyNames(StrategyKind kind) {
+  switch (kind) {
+    case StrategyKind::Range: return rangeQueryNames();
+    case StrategyKind::Inverter: return inverterNames();
+    case StrategyKind::Splitter: return splitterNames();
+  }
+  return {};
+}
+
+const StrategyTraits& strategyTraits(StrategyKind kind, const std::string& name) {
+  switch (kind) {
+    case StrategyKind::Range: return rangeQueryTraits(name);
+    case StrategyKind::Inverter: return inverterTraits(name);
+    case StrategyKind::Splitter: break;
+  }
+  return splitterTraits(name);
+}
+
+std::string strategyChoices(StrategyKind kind) {
+  std::string s;
+  for (const std::string& n : strategyNames(kind)) s += (s.empty() ? "" : " | ") + n;
+  return s;
+}
+
+std::vector<StrategyCombination> allCombinations() {
+  std::vector<StrategyCombination> out;
+  for (const std::string& r : strategyNames(StrategyKind::Range))
+    for (const std::string& i : strategyNames(StrategyKind::Inverter))
+      for (const std::string& s : strategyNames(StrategyKind::Splitter)) {
+        StrategyCombination c;
+        c.config.range = r, c.config.inverter = i, c.config.splitter = s;
+        c.slowReference = strategyTraits(StrategyKind::Range, r).slowReference ||
+                          strategyTraits(StrategyKind::Inverter, i).slowReference ||
+                          strategyTraits(StrategyKind::Splitter, s).slowReference;
+        out.push_back(std::move(c));
+      }
+  return out;
+}
+
+nlohmann::json strategiesJson() {
+  nlohmann::json j;
+  const std::pair<const char*, StrategyKind> kinds[] = {
+      {"range", StrategyKind::Range}, {"inverter", StrategyKind::Inverter}, {"splitter", StrategyKind::Splitter}};
+  for (const auto& [key, kind] : kinds) {
+    j[key] = nlohmann::json::array();
+    for (const std::string& n : strategyNames(kind)) {
+      const StrategyTraits& t = strategyTraits(kind, n);
+      j[key].push_back({{"name", n}, {"summary", t.summary}, {"slow_reference", t.slowReference}});
+    }
+  }
+  j["baselines"] = {"tessellated", "bruteforce", "fixedstep"};
+  const TraversalConfig d;
+  j["default"] = {{"range", d.range}, {"inverter", d.inverter}, {"splitter", d.splitter},
+                  {"marching_scale", d.marchingScale}, {"inversion_in_traversal", d.inversionInTraversal}};
+  return j;
+}
+
+}  // namespace oblong

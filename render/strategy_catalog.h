@@ -1,0 +1,36 @@
+// What is registered, in one place: the strategy names and traits of each interface,
+// every combination the conformance suites run, the choices the CLI help lists and the
+// JSON `oblong info --strategies --json` prints for the experiments. Everything here
+// reads the registries (core/registry.h), so a strategy that registers itself appears
+// in all of them without another edit.
+#pragma once
+
+#include "core/registry.h"
+#include "render/intersector.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace oblong {
+
+enum class StrategyKind { Range, Inverter, Splitter };
+
+std::vector<std::string> strategyNames(StrategyKind kind);
+const StrategyTraits& strategyTraits(StrategyKind kind, const std::string& name);
+// "rmip | minmax_mipmap | safety_zones": the choices as --help lists them.
+std::string strategyChoices(StrategyKind kind);
+
+// One registered range query × inverter × splitter combination with default parameters.
+struct StrategyCombination {
+  TraversalConfig config;
+  bool slowReference = false;  // one of its strategies is a slow reference (e.g. ceres)
+};
+std::vector<StrategyCombination> allCombinations();
+
+// {"range": [{"name", "summary", "slow_reference"}...], "inverter": [...], "splitter": [...],
+//  "baselines": [...], "default": {...}}.
+nlohmann::json strategiesJson();
+
+}  // namespace oblong

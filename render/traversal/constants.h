@@ -1,0 +1,110 @@
+// The traversal's and the inverter's numerical constants, defined once for the CPU
+// (render/traversal.h, inversion/newton.h) and the Vulkan shaders
+// (render/vulkan/shaders/traversal.glsl, which mirrors RayPatch and Newton::solve line by
+// line). This header is both C++ and GLSL: plain #defines with literal values, nothing
+// else. Change a value here and both sides change; a literal changed on one side only is
+// caught by the CPU/GPU parity test ("[vulkan]", tests/vulkan_test.cpp: same hits and
+// the same per-ray work on one-triangle scenes; docs/vulkan.md).
+//
+// Literals: an unsuffixed literal is a double in C++ and a float in GLSL. In the shaders
+// these constants are used in double expressions (or float ones where the CPU uses
+// float), and glslang folds a float literal's conversion to double from the literal's
+// own double value (the SPIR-V holds the double 1e-05, not the float 1e-05f), so both
+// sides compute with the same values.
+//
+// Constants the shaders mirror that are NOT here yet, because their CPU code lives in
+// files outside this change (render/psi.h quadraticRoots and rayParamAt, render/prism.cpp
+// Prism::crossings, render/rect_bounds.h boxOverRect, inversion/cubic.h polyRoots and
+// cubicSolve, the newton default tolerance parsed in inversion/newton.cpp): see
+// docs/vulkan.md "What is shared".
+#ifndef OBLONG_TRAVERSAL_CONSTANTS_H
+#define OBLONG_TRAVERSAL_CONSTANTS_H
+
+// ---- RayPatch (render/traversal.h) -------------------------------------------------------
+
+// Entries of the per-ray, per-prism stack of pieces / box ranges (RayPatch::kStack). A push
+// that would overflow marches (or tests the cells of) the current piece instead: correct,
+// just not hierarchical. Fixed-size so that RayPatch allocates nothing.
+#define OBLONG_TRAV_STACK 128
+
+// Rounding of the watertight micro-triangle test, relative to the magnitudes it works on
+// (RayMargins::make: rayErr = this · (max|p| + max|o| + |a| + |b|), a few float ulps of
+// |p − o|). Pads the boxes and inflates the prism so that they hold the triangle as that
+// test sees it.
+#define OBLONG_TRAV_RAY_ERR 1e-6
+
+// rayErr enters the inflation of the prism (kb·, ks·) and the cell dilation ε (kxy·) twice
+// (RayMargins::make extraB / extraS, RayPatch eps_): both ends of a ray point's error.
+#define OBLONG_TRAV_RAY_ERR_FACTOR 2
+
+// Absolute slack of ray parameters, in units of the box pad along the ray (tAbs =
+// this · boxPad / |D|): float hit distances against double interval ends.
+#define OBLONG_TRAV_T_ABS_PADS 8
+
+// Relative slack of ray parameters (RayPatch::slack(t) = this · |t| + tAbs): intervals are
+// compared with float hit distances and float tmin / tmax.
+#define OBLONG_TRAV_SLACK_REL 1e-5
+
+// Rounding of the dot products of the oriented box around the inflated prism (PrismOBB),
+// relative to the magnitude of the points projected + 1: its build pads by this
+// · (max |vertex| + 1), TraversalMesh::missesPrism's slab test per ray by this ·
+// (max |o| + 1).
+#define OBLONG_TRAV_OBB_ROUND 1e-12
+
+// makePoint: the residual |G(b, s) − X(t)| is computed in double; this relative term
+// (· the largest coordinate of X and G) covers its own rounding.
+#define OBLONG_TRAV_RESIDUAL_ROUND 1e-14
+
+// makePoint: safety factor on the residual bound (the error bounds kb, ks, kxy are
+// first-order; 0.1 % more covers the second-order term while the point is accepted).
+#define OBLONG_TRAV_RESIDUAL_SAFETY 1.001
+
+// makePoint: a curve point is refused (inversion rejected, box fallback) when its
+// barycentric error bound db.x + db.y, or its s error relative to the analysed s domain,
+// reaches this: the first-order bounds are only trusted for small residuals.
+#define OBLONG_TRAV_MAX_POINT_ERR 0.01
+
+// makePoint: keeps the s test meaningful for an empty s domain (0.01 · 0 + this).
+#define OBLONG_TRAV_TINY 1e-300
+
+// Relative rounding allowance in sample units: the curve point's uv pad (this · (1 + |uv|))
+// and the snapping of rectangles and marched rows to cells (this · (1 + |lo| + |hi|)).
+#define OBLONG_TRAV_SNAP_ETA 1e-9
+
+// Cell indices are clamped to ±this before the conversion to int (RayPatch::snap).
+#define OBLONG_TRAV_SNAP_LIMIT 1e9
+
+// minorAt: an end point of the marched piece counts for a column line c when |c − uv| <=
+// pad · REL + ABS (its pad, widened by its own rounding).
+#define OBLONG_TRAV_END_PAD_REL 1.0000001
+#define OBLONG_TRAV_END_PAD_ABS 1e-12
+
+// processPiece: a piece is marched when the end points' pads exceed this fraction of the
+// rectangle's longer side ("pads dominate": splitting cannot shrink it any further).
+#define OBLONG_TRAV_PAD_DOMINANCE 0.25
+
+// processPiece, inversion during traversal: a clipped end is inverted only when the box
+// clip moved it by more than this fraction of the piece's ray interval (minGain).
+#define OBLONG_TRAV_MIN_GAIN 1e-3
+
+// processBox: cell ranges of at most max(this, marching scale) cells per axis are tested
+// cell by cell instead of split.
+#define OBLONG_TRAV_MIN_BOX_CELLS 1
+
+// ---- Newton (inversion/newton.h), float arithmetic as the traversal calls it -------------
+
+// Step tolerance: converged when max(|du|, |dv|) <= tol and |ds| <= tol · (L + |s|)
+// (NewtonOptions::tolerance; float default).
+#define OBLONG_NEWTON_TOLERANCE 1e-5
+
+// Iteration cap (NewtonOptions::maxIterations).
+#define OBLONG_NEWTON_MAX_ITERATIONS 10
+
+// Fallback to the cubic inverter when Newton's result lies outside T by more than this
+// many barycentric units (float; or is not finite, or not converged).
+#define OBLONG_NEWTON_OUTSIDE_EPS 1e-5
+
+// Polishing Newton steps of the cubic fallback (inv::cubicSolve(X, T, this)).
+#define OBLONG_NEWTON_FALLBACK_POLISH 1
+
+#endif
