@@ -8,7 +8,7 @@
 // sharing an edge produce bit-identical points along it.
 //
 // MicroCells is the one implementation: forEachMicroTriangle loops over cells with it,
-// and the traversal (render/traversal.h) calls it cell by cell. It allocates nothing,
+// and the traversal (render/traversal/traversal.h) calls it cell by cell. It allocates nothing,
 // so it can run in a per-ray hot loop, and both paths get bit-identical triangles.
 #pragma once
 

@@ -3,7 +3,7 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/microgeometry.h"
-#include "render/traversal.h"
+#include "render/traversal/traversal.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>

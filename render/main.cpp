@@ -24,7 +24,7 @@
 #include "render/rays_io.h"
 #include "render/renderer.h"
 #include "render/strategy_catalog.h"
-#include "render/traversal.h"
+#include "render/traversal/traversal.h"
 #include "render/vulkan/commands.h"
 #include "strategies/range_query.h"
 

@@ -5,7 +5,7 @@
 // A piece is a stretch of the ray's projection (along the displacement lines) that is
 // monotone in both texture axes, between two curve points a (front, smaller t) and b:
 // the rectangle spanned by a and b bounds it. Coordinates are the traversal's local
-// sample coordinates (render/psi.h): texel centres at integers, grid cells [i,i+1]².
+// sample coordinates (render/traversal/psi.h): texel centres at integers, grid cells [i,i+1]².
 // Each point knows its ray parameter t exactly and its uv up to `pad` (per axis): the
 // true projection of the ray point at t lies within uv ± pad.
 //

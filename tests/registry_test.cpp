@@ -5,7 +5,7 @@
 // traversal instantiation answers exactly as the generic path.
 #include "inversion/newton.h"
 #include "render/strategy_catalog.h"
-#include "render/traversal.h"
+#include "render/traversal/traversal.h"
 #include "strategies/midpoint2d.h"
 #include "strategies/range_query.h"
 #include "strategies/rmip.h"

@@ -8,17 +8,20 @@ micro-triangles are hit at exactly the same t (ties may be broken differently).
 """
 import common as C
 
+# Component -> (flag, registry kind); the strategies come from the binary's registry, the
+# canonical one first.
 COMPONENTS = {
-    "range_query": ("--range", ["rmip", "minmax_mipmap", "safety_zones"]),
-    "splitter": ("--splitter", ["midpoint2d", "midpoint3d", "quadtree"]),
-    "inverter": ("--inverter", ["newton", "cubic", "ceres"]),
+    "range_query": ("--range", "range"),
+    "splitter": ("--splitter", "splitter"),
+    "inverter": ("--inverter", "inverter"),
 }
 
 
 def run(ctx, component: str) -> dict:
     import numpy as np
 
-    flag, names = COMPONENTS[component]
+    flag, kind = COMPONENTS[component]
+    names = C.strategy_names(ctx, kind)
     scenes = ctx.pick(["asteroid", "quad_tiled", "sphere", "terrain"], ["asteroid"])
     names = ctx.pick(names, names)
     integ = "path"

@@ -219,6 +219,29 @@ class Run:
         return self.stats["seconds"]["build"]
 
 
+_STRATEGIES: dict = {}
+
+
+def strategies(ctx: Context) -> dict:
+    """The binary's registered strategies (`oblong info --strategies --json`): per kind
+    ("range", "inverter", "splitter") a list of {name, summary, slow_reference}, and the
+    default configuration. Experiments list strategies from here, never by hand."""
+    key = str(ctx.binary)
+    if key not in _STRATEGIES:
+        out = subprocess.run([key, "info", "--strategies", "--json"], capture_output=True, text=True, check=True,
+                             timeout=60).stdout
+        _STRATEGIES[key] = json.loads(out)
+    return _STRATEGIES[key]
+
+
+def strategy_names(ctx: Context, kind: str) -> list:
+    """Registered names of one kind, the default configuration's first."""
+    s = strategies(ctx)
+    names = [e["name"] for e in s[kind]]
+    default = s["default"][kind]
+    return [default] + [n for n in names if n != default]
+
+
 def run_oblong(ctx: Context, sub: str, scene, args: list, label: str | None = None, timeout: float = 600,
                threads: int | None = None) -> Run:
     """Runs `oblong SUB SCENE ARGS --threads 1 --stats TMP.json`; returns the parsed stats,

@@ -35,20 +35,23 @@ HYPOTHESIS = ("Issues 3–4 and DESIGN invariant 1: every exact configuration re
 
 # Exact configurations: (label, scene variant, flags). "lowres" = the scene with
 # rmip resolution 8, compression 0 (as in the tests); the others use the default scene.
-CONFIGS = [
+# Besides these, every registered strategy swapped into the canonical configuration
+# (configs(): read from the binary's registry).
+SHAPES = [
     ("canonical", "", []),
     ("rmip_lowres8_c0", "lowres", []),
     ("tfdm", "", C.TFDM),
-    ("minmax_mipmap", "", ["--range", "minmax_mipmap"]),
-    ("safety_zones", "", ["--range", "safety_zones"]),
-    ("midpoint3d", "", ["--splitter", "midpoint3d"]),
-    ("quadtree", "", ["--splitter", "quadtree"]),
-    ("cubic", "", ["--inverter", "cubic"]),
-    ("ceres", "", ["--inverter", "ceres"]),
     ("inversion_off", "", ["--inversion-in-traversal", "false"]),
     ("marching_0.5", "", ["--marching-scale", "0.5"]),
     ("marching_16", "", ["--marching-scale", "16"]),
 ]
+
+
+def configs(ctx) -> list:
+    out = SHAPES[:3]
+    for kind, flag in (("range", "--range"), ("splitter", "--splitter"), ("inverter", "--inverter")):
+        out += [(n, "", [flag, n]) for n in C.strategy_names(ctx, kind)[1:]]
+    return out + SHAPES[3:]
 REPORTED = [("tessellated", "", ["--baseline", "tessellated"]), ("fixedstep", "", ["--baseline", "fixedstep"])]
 QUICK = ["canonical", "rmip_lowres8_c0", "tfdm"]  # quick mode (CI): the reported baselines are left out too
 
@@ -438,8 +441,9 @@ def run(ctx):
     import numpy as np
 
     count = ctx.pick(200, 12)
-    names = ctx.pick([c[0] for c in CONFIGS], QUICK)
-    configs = [c for c in CONFIGS if c[0] in names] + ctx.pick(REPORTED, [])
+    all_configs = configs(ctx)
+    names = ctx.pick([c[0] for c in all_configs], QUICK)
+    configs_run = [c for c in all_configs if c[0] in names] + ctx.pick(REPORTED, [])
     rows, fam_rows, failures, refused = [], [], [], []
     for case in cases():
         rng = np.random.default_rng(zlib.crc32(case.name.encode()))
@@ -470,7 +474,7 @@ def run(ctx):
         ref = R.read_hits(ctx.tmp("cases", f"{case.name}_oracle.csv"))
         famarr = np.array(fams)
         nhits = int(np.isfinite(ref["t"]).sum())
-        for label, variant, flags in configs:
+        for label, variant, flags in configs_run:
             out = ctx.tmp("cases", f"{case.name}_{label}.csv")
             r = C.run_oblong(ctx, "trace", scenes[variant], list(flags) + ["--rays", rp, "-o", out],
                              label=f"{case.name}/{label}", threads=2)
@@ -513,7 +517,7 @@ def run(ctx):
     for r in rows:
         if r["case"] not in case_names:
             case_names.append(r["case"])
-    cfg_names = [c[0] for c in configs]
+    cfg_names = [c[0] for c in configs_run]
     M = np.full((len(case_names), len(cfg_names)), np.nan)
     for r in rows:
         if r["config"] in cfg_names and r["rays"]:

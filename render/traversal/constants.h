@@ -1,5 +1,5 @@
 // The traversal's and the inverter's numerical constants, defined once for the CPU
-// (render/traversal.h, inversion/newton.h) and the Vulkan shaders
+// (render/traversal/traversal.h, inversion/newton.h) and the Vulkan shaders
 // (render/vulkan/shaders/traversal.glsl, which mirrors RayPatch and Newton::solve line by
 // line). This header is both C++ and GLSL: plain #defines with literal values, nothing
 // else. Change a value here and both sides change; a literal changed on one side only is
@@ -13,14 +13,14 @@
 // sides compute with the same values.
 //
 // Constants the shaders mirror that are NOT here yet, because their CPU code lives in
-// files outside this change (render/psi.h quadraticRoots and rayParamAt, render/prism.cpp
-// Prism::crossings, render/rect_bounds.h boxOverRect, inversion/cubic.h polyRoots and
+// files outside this change (render/traversal/psi.h quadraticRoots and rayParamAt, render/traversal/prism.cpp
+// Prism::crossings, render/traversal/rect_bounds.h boxOverRect, inversion/cubic.h polyRoots and
 // cubicSolve, the newton default tolerance parsed in inversion/newton.cpp): see
 // docs/vulkan.md "What is shared".
 #ifndef OBLONG_TRAVERSAL_CONSTANTS_H
 #define OBLONG_TRAVERSAL_CONSTANTS_H
 
-// ---- RayPatch (render/traversal.h) -------------------------------------------------------
+// ---- RayPatch (render/traversal/traversal.h) -------------------------------------------------------
 
 // Entries of the per-ray, per-prism stack of pieces / box ranges (RayPatch::kStack). A push
 // that would overflow marches (or tests the cells of) the current piece instead: correct,

@@ -41,7 +41,7 @@ using uint = uint32_t;
 #define OBLONG_HITGROUP_PRISM 0
 #define OBLONG_HITGROUP_TRIANGLES 1
 
-// Traversal stack entries per ray and prism (render/traversal.h RayPatch::kStack).
+// Traversal stack entries per ray and prism (render/traversal/traversal.h RayPatch::kStack).
 #define OBLONG_STACK 128
 
 // One ray, laid out as the CPU's Ray (o, d, tmin, tmax): ray buffers are copied as is.
@@ -69,7 +69,7 @@ struct CountersGpu {
 };
 
 // One displaced base triangle: DisplacedTriangle, its PrismParams, LocalFrame and the
-// MicroCells constants (render/traversal.h, render/psi.h, core/microgeometry.h),
+// MicroCells constants (render/traversal/traversal.h, render/traversal/psi.h, core/microgeometry.h),
 // precomputed on the host by the very code the CPU runs.
 struct TriGpu {
   // LocalFrame: P = Pc + PX X + PY Y, N = Nc + NX X + NY Y over local sample coordinates.

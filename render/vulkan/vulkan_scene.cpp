@@ -1,6 +1,6 @@
 // Vulkan ray tracing path: device, buffers, acceleration structures, pipeline, dispatch.
 // The traversal itself is in shaders/ (GLSL); the per-triangle constants it reads are
-// taken from the CPU's own TraversalMesh (render/traversal.h), built by the same
+// taken from the CPU's own TraversalMesh (render/traversal/traversal.h), built by the same
 // createIntersector call that EmbreeScene makes, so both paths start from identical
 // numbers. See docs/vulkan.md.
 #include "render/vulkan/vulkan_scene.h"
@@ -9,7 +9,7 @@
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 
 #include "core/error.h"
-#include "render/traversal.h"
+#include "render/traversal/traversal.h"
 #include "render/vulkan/rmip_layout.h"
 #include "render/vulkan/shared.h"
 

@@ -1,7 +1,7 @@
 // The micro-geometry cell by cell (DESIGN §1): a line-for-line GLSL port of
 // core/microgeometry.cpp's MicroCells::cell (interior cells, Sutherland-Hodgman clipping
 // against T's edges with the line bookkeeping, canonical edge evaluation) and of
-// render/microtri.h's watertight ray/micro-triangle test. Every float and double
+// render/traversal/microtri.h's watertight ray/micro-triangle test. Every float and double
 // operation is `precise` (SPIR-V NoContraction): no fused multiply-add, so the
 // micro-vertices, edge functions and t come out as the CPU computes them, which both
 // watertightness and CPU/GPU parity rely on. Needs the globals of traversal.glsl:
@@ -316,7 +316,7 @@ int microCell(int i, int j) {
   return count;
 }
 
-// ---- watertight ray / micro-triangle test (render/microtri.h) -----------------------
+// ---- watertight ray / micro-triangle test (render/traversal/microtri.h) -----------------------
 vec3 g_wrO;
 int g_wrKx, g_wrKy, g_wrKz;
 float g_wrSx, g_wrSy, g_wrSz;

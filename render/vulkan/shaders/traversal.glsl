@@ -1,4 +1,4 @@
-// The per-ray, per-prism traversal (render/traversal.h's RayPatch) in GLSL, for the
+// The per-ray, per-prism traversal (render/traversal/traversal.h's RayPatch) in GLSL, for the
 // intersection shader. Mirrors the CPU code function by function (same names, same
 // order of operations, double where the CPU uses double, float where it uses float).
 //
@@ -141,7 +141,7 @@ vec2 toHeight(vec2 raw) {
   return vec2(min(a, b), max(a, b));
 }
 
-// ---- boxOverRect (render/rect_bounds.h) -----------------------------------------------
+// ---- boxOverRect (render/traversal/rect_bounds.h) -----------------------------------------------
 void boxOverRect(double m, dvec2 lo, dvec2 hi, double hlo, double hhi, double pad, out dvec3 blo, out dvec3 bhi) {
   precise dvec3 Nlo, Nhi;
   for (int k = 0; k < 3; ++k) {
@@ -223,7 +223,7 @@ double copysignD(double m, double s) {  // std::copysign
   return neg ? -abs(m) : abs(m);
 }
 
-// LocalFrame (render/psi.h)
+// LocalFrame (render/traversal/psi.h)
 dvec2 frameBary(dvec2 p) {
   precise dvec2 r = TRI.bc + TRI.bX * p.x + TRI.bY * p.y;
   return r;
@@ -241,7 +241,7 @@ dvec3 frameN(dvec2 b) {
   return r;
 }
 
-// ---- quadraticRoots (render/psi.h) -----------------------------------------------------
+// ---- quadraticRoots (render/traversal/psi.h) -----------------------------------------------------
 int quadraticRoots(double q2, double q1, double q0, out double w[2], out double pad[2]) {
   w[0] = 0.0;
   w[1] = 0.0;
@@ -280,7 +280,7 @@ int quadraticRoots(double q2, double q1, double q0, out double w[2], out double 
   return n;
 }
 
-// ---- ψ (render/psi.h Psi) --------------------------------------------------------------
+// ---- ψ (render/traversal/psi.h Psi) --------------------------------------------------------------
 double g_c0, g_cX, g_cY, g_cXX, g_cXY, g_cYY;
 
 void psiMake() {
@@ -369,7 +369,7 @@ int monotoneSplits(double tIn, double tOut, out double ts[4]) {
   return u;
 }
 
-// ---- the inflated prism and its crossings (render/prism.cpp Prism) -------------------
+// ---- the inflated prism and its crossings (render/traversal/prism.cpp Prism) -------------------
 dvec3 g_pq[3], g_pn[3];
 dvec2 g_pbv[3];
 double g_pa, g_pb;

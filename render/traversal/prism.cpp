@@ -1,5 +1,5 @@
 // Bounding prisms and the shell analysis (see prism.h for the reasoning).
-#include "render/prism.h"
+#include "render/traversal/prism.h"
 
 #include <cmath>
 

@@ -32,7 +32,7 @@
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/triangle.h"
-#include "render/psi.h"
+#include "render/traversal/psi.h"
 
 namespace oblong {
 

@@ -1,19 +1,15 @@
-// The traversal driver (RMIP paper Alg. 1; DESIGN §2): Traversal<RQ, Inv, Split>, an
-// Intersector over any registered strategy combination. createIntersector
-// (render/intersector.h) builds Traversal<RangeQuery, Inverter, Splitter>, which calls
-// the strategies through their virtual interfaces (one indirect call per range query,
-// inversion and split); an opt-in static instantiation on concrete types is one line
-// (OBLONG_STATIC_TRAVERSAL below) and is kept only where a benchmark shows it faster.
+// RayPatch: one ray against one displaced triangle, the state of the RMIP traversal
+// (Thonat et al. 2023, Alg. 1; DESIGN §2) and the splitters' context.
 //
 // Per ray and displaced triangle (docs/traversal.md has the reasoning):
-//   1. Clip the ray to the triangle's inflated prism (render/prism.h); its crossings give
+//   1. Clip the ray to the triangle's inflated prism (render/traversal/prism.h); its crossings give
 //      the interval [tIn, tOut] and the uv of its ends; a ray starting (or ending) inside
 //      gets its end's uv by inversion.
-//   2. Split [tIn, tOut] where the curve may turn (render/psi.h): monotone pieces.
+//   2. Split [tIn, tOut] where the curve may turn (render/traversal/psi.h): monotone pieces.
 //   3. Fixed-size stack of pieces, front to back. A piece whose rectangle is at most
 //      `marchingScale` texels is marched (below); otherwise its rectangle, dilated by ε
 //      and snapped outward to whole cells, is bounded (RangeQuery + interval arithmetic,
-//      render/rect_bounds.h), the ray is clipped to that box, the piece is optionally
+//      render/traversal/rect_bounds.h), the ray is clipped to that box, the piece is optionally
 //      tightened by inverting the clipped ends (Fig. 12 "inversion during traversal"),
 //      and the splitter cuts it in two.
 //   4. Texel marching (§4.4): the cells within ε of the monotone piece, column by column
@@ -31,16 +27,15 @@
 #include "core/stats.h"
 #include "inversion/inverter.h"
 #include "render/intersector.h"
-#include "render/microtri.h"
-#include "render/prism.h"
-#include "render/psi.h"
-#include "render/rect_bounds.h"
+#include "render/traversal/closest_hit.h"
 #include "render/traversal/constants.h"
+#include "render/traversal/prism.h"
+#include "render/traversal/psi.h"
+#include "render/traversal/rect_bounds.h"
+#include "render/traversal/traversal_mesh.h"
 #include "strategies/range_query.h"
 #include "strategies/splitter.h"
 
-#include <array>
-#include <memory>
 #include <new>
 #include <type_traits>
 
@@ -62,168 +57,6 @@ OBLONG_STAT_COUNTER("traversal/IllPosedTriangles", travIllPosed);
 OBLONG_STAT_COUNTER("traversal/RejectedInversions", travBadInversions);
 OBLONG_STAT_COUNTER("traversal/StackOverflows", travOverflows);
 
-inline double maxAbsVertex(const DisplacedTriangle& T) {
-  double m = 0;
-  for (int k = 0; k < 3; ++k)
-    m = std::max({m, std::abs(double(T.p[k].x)), std::abs(double(T.p[k].y)), std::abs(double(T.p[k].z))});
-  return m;
-}
-
-// Margins for the watertight micro-triangle test's own rounding (a few ulps of |p − o|)
-// for rays whose origin has max-norm at most maxO: the boxes and the inflated prism must
-// hold the triangle as that test sees it.
-struct RayMargins {
-  double rayErr, boxPad, extraB, extraS;
-  static RayMargins make(const PrismParams& P, double maxP, double maxO) {
-    RayMargins m;
-    m.rayErr = OBLONG_TRAV_RAY_ERR * (maxP + maxO + std::abs(P.a) + std::abs(P.b));
-    m.boxPad = P.vertexErr + m.rayErr;
-    m.extraB = (P.kb.x + P.kb.y) * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
-    m.extraS = P.ks * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
-    return m;
-  }
-  Prism prism(const LocalFrame& F, const PrismParams& P) const {
-    return Prism::inflated(F, P.a - P.inflateS - extraS, P.b + P.inflateS + extraS, P.inflateB + extraB);
-  }
-};
-
-// An oriented box in T's frame (edge, in-plane perpendicular, face normal) around the
-// six vertices of a prism, hence around the prism (a convex combination of them). Most
-// rays Embree hands over meet the world AABB of a tilted prism but miss the prism; this
-// slab test rejects them before the exact crossings (render/prism.cpp).
-struct PrismOBB {
-  dvec3 axis[3]{dvec3(0.0), dvec3(0.0), dvec3(0.0)};
-  dvec3 lo{0.0}, hi{-1.0};  // in the axes' coordinates (relative to the world origin)
-
-  static PrismOBB around(const Prism& p, const DisplacedTriangle& T, double pad) {
-    PrismOBB b;
-    const dvec3 e = dvec3(T.p[1]) - dvec3(T.p[0]), f = dvec3(T.p[2]) - dvec3(T.p[0]);
-    const dvec3 n = glm::cross(e, f);
-    if (!(glm::length(n) > 0) || !(glm::length(e) > 0)) return b;  // empty: not used
-    b.axis[0] = glm::normalize(e);
-    b.axis[2] = glm::normalize(n);
-    b.axis[1] = glm::cross(b.axis[2], b.axis[0]);
-    b.lo = dvec3(std::numeric_limits<double>::infinity());
-    b.hi = -b.lo;
-    double mag = 0;
-    for (int k = 0; k < 6; ++k) {
-      const dvec3 v = p.vertex(k % 3, k >= 3);
-      const dvec3 c(glm::dot(b.axis[0], v), glm::dot(b.axis[1], v), glm::dot(b.axis[2], v));
-      b.lo = glm::min(b.lo, c);
-      b.hi = glm::max(b.hi, c);
-      mag = std::max({mag, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
-    }
-    // The pad of the boxes, plus the rounding of these dot products here and per ray.
-    const double r = pad + OBLONG_TRAV_OBB_ROUND * (mag + 1);
-    b.lo -= dvec3(r);
-    b.hi += dvec3(r);
-    return b;
-  }
-  bool valid() const { return lo.x <= hi.x; }
-  // Clips [t0, t1] to the box (t0 > t1 when missed). `slack` covers this ray's own
-  // rounding (relative to its origin's magnitude).
-  void clip(const dvec3& O, const dvec3& D, double slack, double& t0, double& t1) const {
-    for (int k = 0; k < 3; ++k) {
-      const double o = glm::dot(axis[k], O), d = glm::dot(axis[k], D);
-      const double l = lo[k] - slack, h = hi[k] + slack;
-      if (d == 0.0) {
-        if (o < l || o > h) t0 = std::numeric_limits<double>::infinity();
-        continue;
-      }
-      double a = (l - o) / d, b = (h - o) / d;
-      if (a > b) std::swap(a, b);
-      t0 = std::max(t0, a);
-      t1 = std::min(t1, b);
-    }
-  }
-};
-
-// Everything a displaced mesh's intersector shares, whatever the strategies.
-struct TraversalMesh {
-  std::vector<DisplacedTriangle> tris;
-  std::vector<PrismParams> params;
-  std::vector<CellRange> cells;  // cellsOverlapping(T) per triangle
-  // Per-ray work that does not depend on the ray, done once per triangle: the local
-  // frame, and the inflated prism and exact-prism box padded for the watertight test's
-  // rounding of any ray whose origin lies within `originBudget` (max-norm) — a larger
-  // pad is still conservative. Rays from farther away rebuild them (RayPatch).
-  std::vector<LocalFrame> frames;
-  std::vector<Prism> prisms;
-  std::vector<BoxD> prismBoxes;     // exact prism box, padded
-  std::vector<BoxD> inflatedBoxes;  // inflated prism box, padded
-  std::vector<PrismOBB> obbs;       // oriented box around the inflated prism, padded
-  std::vector<double> originBudget;
-  std::vector<double> budgetPad;  // RayMargins::boxPad for an origin at the budget
-  Displacement disp;
-  float cellDelta = 0;  // maxCellDelta(map)
-
-  // Builds the per-triangle constants; heights(T) is [hmin, hmax] over T's uv box.
-  template <typename Heights>
-  void build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights);
-  size_t bytes() const {
-    return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
-           cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
-           prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
-           (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB);
-  }
-  // The world box of triangle `prim`'s exact prism (empty when it is skipped).
-  AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
-
-  // A cheap exact reject before any per-ray set-up: true when [tmin, tmax] (with the
-  // traversal's own slack) misses the padded boxes around the inflated prism. Only for
-  // origins within the budget; beyond it, false (the full test decides).
-  bool missesPrism(uint32_t prim, const Ray& r) const {
-    const dvec3 O(r.o), D(r.d);
-    const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
-    if (!(maxO <= originBudget[prim])) return false;
-    const double tAbs = OBLONG_TRAV_T_ABS_PADS * budgetPad[prim] / glm::length(D);
-    double t0 = r.tmin - (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmin)) + tAbs);
-    double t1 = r.tmax + (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmax)) + tAbs);
-    inflatedBoxes[prim].clip(O, 1.0 / D, t0, t1);
-    if (!(t0 <= t1)) return true;
-    if (obbs[prim].valid()) obbs[prim].clip(O, D, OBLONG_TRAV_OBB_ROUND * (maxO + 1), t0, t1);
-    return !(t0 <= t1);
-  }
-};
-
-// Skipped triangles (not displaceable) are reported once per mesh.
-void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what);
-
-template <typename Heights>
-void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights) {
-  tris = std::move(triangles);
-  disp = d;
-  cellDelta = maxCellDelta(*d.map);
-  params.resize(tris.size());
-  cells.resize(tris.size());
-  frames.resize(tris.size());
-  prisms.resize(tris.size());
-  prismBoxes.resize(tris.size());
-  inflatedBoxes.resize(tris.size());
-  obbs.resize(tris.size());
-  originBudget.assign(tris.size(), -1.0);
-  budgetPad.assign(tris.size(), 0.0);
-  for (size_t i = 0; i < tris.size(); ++i) {
-    const DisplacedTriangle& T = tris[i];
-    cells[i] = cellsOverlapping(T, d);
-    const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
-    params[i] = ok ? analyzeShell(T, d, heights(T), cellDelta) : PrismParams{};
-    if (!params[i].valid) continue;
-    frames[i] = LocalFrame::make(T, d);
-    // Origins up to 16 times the triangle's own extent from the world origin (plus 16).
-    const double maxP = maxAbsVertex(T), ab = std::abs(params[i].a) + std::abs(params[i].b);
-    originBudget[i] = 16 * (maxP + ab) + 16;
-    const RayMargins m = RayMargins::make(params[i], maxP, originBudget[i]);
-    budgetPad[i] = m.boxPad;
-    prisms[i] = m.prism(frames[i], params[i]);
-    prismBoxes[i] = Prism::exact(T, params[i].a, params[i].b).bounds();
-    prismBoxes[i].pad(m.boxPad);
-    inflatedBoxes[i] = prisms[i].bounds();
-    inflatedBoxes[i].pad(m.boxPad);
-    obbs[i] = PrismOBB::around(prisms[i], T, m.boxPad);
-  }
-}
-
 // The counters of one intersect() call, flushed to RayCounters and the statistics once.
 inline void flushCounters(const RayCounters& local, bool hit, RayCounters& c) {
   c += local;
@@ -236,26 +69,6 @@ inline void flushCounters(const RayCounters& local, bool hit, RayCounters& c) {
   if (hit) OBLONG_STAT_INC(travHits);
   (void)hit;
 }
-
-// Closest hit over micro-triangles, shared by the traversal and the baselines.
-struct ClosestHit {
-  float t = kInfinity;
-  bool found = false;
-  MicroTriangle tri{};
-  MicroHit h{};
-
-  void test(const WatertightRay& R, const MicroTriangle& m, float tmin, float tmax) {
-    MicroHit mh;
-    // Closed range [tmin, min(tmax, t)], then strict: the first of equal-t hits wins.
-    if (intersectMicro(R, m.v[0].p, m.v[1].p, m.v[2].p, tmin, std::min(tmax, t), mh) && (!found || mh.t < t)) {
-      t = mh.t, found = true, tri = m, h = mh;
-    }
-  }
-  void fill(TriangleHit& hit) const {
-    hit.t = t;
-    microHitAttributes(tri, h, hit.uv, hit.ng);
-  }
-};
 
 namespace detail {
 
@@ -620,7 +433,7 @@ class RayPatch final : public SplitContext {
     if (!clipToCells(clo, chi, t0, t1)) return;
     if (opt_.inversionInTraversal) {
       // Fig. 5a: the clipped ends' projections can give a much smaller rectangle.
-      const double minGain = 5e-2 * (p.b.t - p.a.t);  // SCRATCH: CPU-only change, to be reverted
+      const double minGain = OBLONG_TRAV_MIN_GAIN * (p.b.t - p.a.t);
       CurvePoint m;
       if (t0 > p.a.t + minGain && invertAt(t0, m)) p.a = m;
       if (t1 < p.b.t - minGain && invertAt(t1, m)) p.b = m;
@@ -717,118 +530,5 @@ class RayPatch final : public SplitContext {
   alignas(MicroCells) unsigned char mcRaw_[sizeof(MicroCells)];
   const MicroCells& cells() const { return *reinterpret_cast<const MicroCells*>(mcRaw_); }
 };
-
-// What createIntersector hands to a traversal instantiation: the built strategies, their
-// resolved parameters and the per-triangle constants.
-struct TraversalParts {
-  std::string name;
-  TraversalMesh mesh;
-  std::unique_ptr<RangeQuery> rq;
-  std::unique_ptr<Inverter> inv;
-  std::unique_ptr<Splitter> split;
-  nlohmann::json rangeParams, inverterParams, splitterParams;  // ParamSet::resolved()
-  TraversalOptions opt;
-};
-
-// Shared part of the traversal intersectors.
-class TraversalIntersectorBase : public Intersector {
- public:
-  TraversalIntersectorBase(TraversalParts&& p, std::string path)
-      : name_(std::move(p.name)),
-        path_(std::move(path)),
-        mesh_(std::move(p.mesh)),
-        rq_(std::move(p.rq)),
-        inv_(std::move(p.inv)),
-        split_(std::move(p.split)),
-        params_{std::move(p.rangeParams), std::move(p.inverterParams), std::move(p.splitterParams)},
-        opt_(p.opt) {}
-  std::string name() const override { return name_; }
-  size_t size() const override { return mesh_.tris.size(); }
-  AABB bounds(uint32_t prim) const override { return mesh_.bounds(prim); }
-  MemoryReport memory() const override {
-    MemoryReport r = rq_->memory();
-    r.push_back({"traversal/triangles", mesh_.bytes()});
-    return r;
-  }
-  nlohmann::json describe() const override;
-  // "generic" (virtual calls into the strategies) or "static" (an opt-in instantiation
-  // on the concrete strategy types).
-  const std::string& path() const { return path_; }
-  const TraversalMesh& mesh() const { return mesh_; }
-  const RangeQuery& rangeQuery() const { return *rq_; }
-
- protected:
-  std::string name_, path_;
-  TraversalMesh mesh_;
-  std::unique_ptr<RangeQuery> rq_;
-  std::unique_ptr<Inverter> inv_;
-  std::unique_ptr<Splitter> split_;
-  nlohmann::json params_[3];  // range, inverter, splitter
-  TraversalOptions opt_;
-};
-
-template <typename RQ, typename Inv, typename Split>
-class Traversal final : public TraversalIntersectorBase {
- public:
-  static constexpr bool kGeneric =
-      std::is_same_v<RQ, RangeQuery> && std::is_same_v<Inv, Inverter> && std::is_same_v<Split, Splitter>;
-  explicit Traversal(TraversalParts&& p) : TraversalIntersectorBase(std::move(p), kGeneric ? "generic" : "static") {}
-
-  bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
-    if (!mesh_.params[prim].valid) return false;
-    RayCounters local;
-    local.prisms = 1;
-    if (mesh_.missesPrism(prim, r)) {
-      flushCounters(local, false, c);
-      return false;
-    }
-    const RQ& rq = static_cast<const RQ&>(*rq_);
-    const Inv& inv = static_cast<const Inv&>(*inv_);
-    const Split& split = static_cast<const Split&>(*split_);
-    RayPatch<RQ, Inv> patch(mesh_, prim, rq, inv, opt_, r, local);
-    const bool found = patch.run(split);
-    if (found) patch.hit().fill(hit);
-    flushCounters(local, found, c);
-    return found;
-  }
-};
-
-// The generic path: Traversal<RangeQuery, Inverter, Splitter> (traversal.cpp).
-std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p);
-
-// Opt-in static instantiations. The generic path is the default: measured on this code,
-// instantiations on the concrete strategy types ran 1-3% slower (docs/traversal.md), so
-// none is registered. One that a benchmark shows to be faster is one line in a .cpp
-// linked into the program:
-//     OBLONG_STATIC_TRAVERSAL(Rmip, Newton, Midpoint2D);
-// createIntersector then uses it for exactly that combination (`path()` says which ran).
-struct StaticTraversal {
-  bool (*matches)(const TraversalParts&);
-  std::unique_ptr<Intersector> (*make)(TraversalParts&&);
-};
-std::vector<StaticTraversal>& staticTraversals();
-
-template <typename RQ, typename Inv, typename Split>
-StaticTraversal staticTraversal() {
-  return {[](const TraversalParts& p) {
-            return dynamic_cast<const RQ*>(p.rq.get()) && dynamic_cast<const Inv*>(p.inv.get()) &&
-                   dynamic_cast<const Split*>(p.split.get());
-          },
-          [](TraversalParts&& p) -> std::unique_ptr<Intersector> {
-            return std::make_unique<Traversal<RQ, Inv, Split>>(std::move(p));
-          }};
-}
-struct StaticTraversalRegistration {
-  explicit StaticTraversalRegistration(StaticTraversal t) { staticTraversals().push_back(t); }
-};
-#define OBLONG_STATIC_TRAVERSAL(RQ, Inv, Split)                                                          \
-  static const ::oblong::StaticTraversalRegistration OBLONG_REGISTRY_CAT(oblongStaticTraversal_, __LINE__) { \
-    ::oblong::staticTraversal<RQ, Inv, Split>()                                                         \
-  }
-
-// The baselines sharing the micro-geometry (traversal.cpp).
-std::unique_ptr<Intersector> makeBruteForce(std::vector<DisplacedTriangle> triangles, const Displacement& disp);
-std::unique_ptr<Intersector> makeFixedStep(std::vector<DisplacedTriangle> triangles, const Displacement& disp,
-                                           float step, std::unique_ptr<Inverter> inv);
 
 }  // namespace oblong

@@ -17,8 +17,8 @@
 // never converted to float (the ray/box test runs in double).
 #pragma once
 
-#include "render/prism.h"
-#include "render/psi.h"
+#include "render/traversal/prism.h"
+#include "render/traversal/psi.h"
 
 namespace oblong {
 

@@ -1,0 +1,96 @@
+// createIntersector: the traversal for any registered strategy combination (the generic
+// path, or an opt-in static instantiation), or one of the baselines (baselines.cpp).
+// See render/traversal/traversal.h and docs/traversal.md.
+#include "render/traversal/traversal.h"
+
+#include "core/error.h"
+#include "core/scene.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace oblong {
+
+void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what) {
+  size_t skipped = 0, first = 0;
+  for (size_t i = mesh.params.size(); i-- > 0;)
+    if (!mesh.params[i].valid) ++skipped, first = i;
+  if (skipped)
+    fmt::print(stderr,
+               "oblong: warning: {}: skipped {} of {} displaced triangles that cannot be displaced (zero area, "
+               "degenerate uvs or vanishing normals; first: triangle {})\n",
+               what, skipped, mesh.params.size(), first);
+}
+
+std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::vector<DisplacedTriangle> triangles,
+                                               const Displacement& disp) {
+  if (!disp.map) throw Error("traversal: a displaced mesh needs a displacement map");
+  if (cfg.baseline == "bruteforce") return makeBruteForce(std::move(triangles), disp);
+  if (cfg.baseline == "fixedstep") {
+    if (!(cfg.fixedStep >= 0) || !std::isfinite(cfg.fixedStep))
+      fail("traversal", "fixed step must be >= 0 (0: one texel), got {}", cfg.fixedStep);
+    ParamSet ips(cfg.inverterParams, "strategies.inverter");
+    auto inv = createInverter(cfg.inverter, ips);
+    return makeFixedStep(std::move(triangles), disp, cfg.fixedStep, std::move(inv));
+  }
+  if (!cfg.baseline.empty())
+    fail("traversal", "unknown baseline '{}' (known: bruteforce, fixedstep; the tessellated baseline is not an "
+                      "intersector)", cfg.baseline);
+  if (!(cfg.marchingScale >= kMinMarchingScale) || !std::isfinite(cfg.marchingScale))
+    fail("traversal", "marching scale must be a finite number of texels >= {} (smaller only multiplies the work), got {}",
+         kMinMarchingScale, cfg.marchingScale);
+
+  // Invariant 4: the range query is built for what these triangles can ask.
+  std::vector<Rect> boxes;
+  boxes.reserve(triangles.size());
+  for (const DisplacedTriangle& T : triangles)
+    if (T.uvArea2 != 0.0f) boxes.push_back(T.uvBox);
+  ParamSet rps(cfg.rangeParams, "strategies.range");
+  auto rq = createRangeQuery(cfg.range, rps, RangeQueryContext{disp, QueryNeeds::forRects(disp, boxes)});
+  ParamSet ips(cfg.inverterParams, "strategies.inverter");
+  auto inv = createInverter(cfg.inverter, ips);
+  ParamSet sps(cfg.splitterParams, "strategies.splitter");
+  auto split = createSplitter(cfg.splitter, sps);
+
+  TraversalParts parts;
+  parts.name = cfg.range + "+" + cfg.inverter + "+" + cfg.splitter;
+  const RangeQuery& q = *rq;
+  parts.mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return q.query(T.uvBox); });
+  warnSkippedTriangles(parts.mesh, parts.name);
+  parts.rq = std::move(rq);
+  parts.inv = std::move(inv);
+  parts.split = std::move(split);
+  parts.rangeParams = rps.resolved();
+  parts.inverterParams = ips.resolved();
+  parts.splitterParams = sps.resolved();
+  parts.opt = TraversalOptions{cfg.marchingScale, cfg.inversionInTraversal};
+  for (const StaticTraversal& st : staticTraversals())
+    if (st.matches(parts)) return st.make(std::move(parts));
+  return makeGenericTraversal(std::move(parts));
+}
+
+std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p) {
+  return std::make_unique<Traversal<RangeQuery, Inverter, Splitter>>(std::move(p));
+}
+
+std::vector<StaticTraversal>& staticTraversals() {
+  static std::vector<StaticTraversal> list;
+  return list;
+}
+
+nlohmann::json TraversalIntersectorBase::describe() const {
+  nlohmann::json range = rq_->describe();
+  range["params"] = params_[0];
+  return {{"name", name_},
+          {"path", path_},
+          {"range", range},
+          {"inverter", {{"name", std::string(inv_->name())}, {"params", params_[1]}}},
+          {"splitter", {{"name", std::string(split_->name())}, {"params", params_[2]}}},
+          {"marching_scale", opt_.marchingScale},
+          {"inversion_in_traversal", opt_.inversionInTraversal}};
+}
+
+}  // namespace oblong

@@ -1,0 +1,180 @@
+// Per-triangle constants of a displaced mesh's traversal, built once: the shell analysis
+// (render/traversal/prism.h), the local frame (psi.h), the inflated prism with its boxes
+// padded for the watertight micro-triangle test's rounding, and the cheap per-ray reject.
+#pragma once
+
+#include "core/microgeometry.h"
+#include "render/intersector.h"
+#include "render/traversal/constants.h"
+#include "render/traversal/prism.h"
+#include "render/traversal/psi.h"
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace oblong {
+
+inline double maxAbsVertex(const DisplacedTriangle& T) {
+  double m = 0;
+  for (int k = 0; k < 3; ++k)
+    m = std::max({m, std::abs(double(T.p[k].x)), std::abs(double(T.p[k].y)), std::abs(double(T.p[k].z))});
+  return m;
+}
+
+// Margins for the watertight micro-triangle test's own rounding (a few ulps of |p − o|)
+// for rays whose origin has max-norm at most maxO: the boxes and the inflated prism must
+// hold the triangle as that test sees it.
+struct RayMargins {
+  double rayErr, boxPad, extraB, extraS;
+  static RayMargins make(const PrismParams& P, double maxP, double maxO) {
+    RayMargins m;
+    m.rayErr = OBLONG_TRAV_RAY_ERR * (maxP + maxO + std::abs(P.a) + std::abs(P.b));
+    m.boxPad = P.vertexErr + m.rayErr;
+    m.extraB = (P.kb.x + P.kb.y) * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
+    m.extraS = P.ks * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
+    return m;
+  }
+  Prism prism(const LocalFrame& F, const PrismParams& P) const {
+    return Prism::inflated(F, P.a - P.inflateS - extraS, P.b + P.inflateS + extraS, P.inflateB + extraB);
+  }
+};
+
+// An oriented box in T's frame (edge, in-plane perpendicular, face normal) around the
+// six vertices of a prism, hence around the prism (a convex combination of them). Most
+// rays Embree hands over meet the world AABB of a tilted prism but miss the prism; this
+// slab test rejects them before the exact crossings (render/traversal/prism.cpp).
+struct PrismOBB {
+  dvec3 axis[3]{dvec3(0.0), dvec3(0.0), dvec3(0.0)};
+  dvec3 lo{0.0}, hi{-1.0};  // in the axes' coordinates (relative to the world origin)
+
+  static PrismOBB around(const Prism& p, const DisplacedTriangle& T, double pad) {
+    PrismOBB b;
+    const dvec3 e = dvec3(T.p[1]) - dvec3(T.p[0]), f = dvec3(T.p[2]) - dvec3(T.p[0]);
+    const dvec3 n = glm::cross(e, f);
+    if (!(glm::length(n) > 0) || !(glm::length(e) > 0)) return b;  // empty: not used
+    b.axis[0] = glm::normalize(e);
+    b.axis[2] = glm::normalize(n);
+    b.axis[1] = glm::cross(b.axis[2], b.axis[0]);
+    b.lo = dvec3(std::numeric_limits<double>::infinity());
+    b.hi = -b.lo;
+    double mag = 0;
+    for (int k = 0; k < 6; ++k) {
+      const dvec3 v = p.vertex(k % 3, k >= 3);
+      const dvec3 c(glm::dot(b.axis[0], v), glm::dot(b.axis[1], v), glm::dot(b.axis[2], v));
+      b.lo = glm::min(b.lo, c);
+      b.hi = glm::max(b.hi, c);
+      mag = std::max({mag, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+    }
+    // The pad of the boxes, plus the rounding of these dot products here and per ray.
+    const double r = pad + OBLONG_TRAV_OBB_ROUND * (mag + 1);
+    b.lo -= dvec3(r);
+    b.hi += dvec3(r);
+    return b;
+  }
+  bool valid() const { return lo.x <= hi.x; }
+  // Clips [t0, t1] to the box (t0 > t1 when missed). `slack` covers this ray's own
+  // rounding (relative to its origin's magnitude).
+  void clip(const dvec3& O, const dvec3& D, double slack, double& t0, double& t1) const {
+    for (int k = 0; k < 3; ++k) {
+      const double o = glm::dot(axis[k], O), d = glm::dot(axis[k], D);
+      const double l = lo[k] - slack, h = hi[k] + slack;
+      if (d == 0.0) {
+        if (o < l || o > h) t0 = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      double a = (l - o) / d, b = (h - o) / d;
+      if (a > b) std::swap(a, b);
+      t0 = std::max(t0, a);
+      t1 = std::min(t1, b);
+    }
+  }
+};
+
+// Everything a displaced mesh's intersector shares, whatever the strategies.
+struct TraversalMesh {
+  std::vector<DisplacedTriangle> tris;
+  std::vector<PrismParams> params;
+  std::vector<CellRange> cells;  // cellsOverlapping(T) per triangle
+  // Per-ray work that does not depend on the ray, done once per triangle: the local
+  // frame, and the inflated prism and exact-prism box padded for the watertight test's
+  // rounding of any ray whose origin lies within `originBudget` (max-norm) — a larger
+  // pad is still conservative. Rays from farther away rebuild them (RayPatch).
+  std::vector<LocalFrame> frames;
+  std::vector<Prism> prisms;
+  std::vector<BoxD> prismBoxes;     // exact prism box, padded
+  std::vector<BoxD> inflatedBoxes;  // inflated prism box, padded
+  std::vector<PrismOBB> obbs;       // oriented box around the inflated prism, padded
+  std::vector<double> originBudget;
+  std::vector<double> budgetPad;  // RayMargins::boxPad for an origin at the budget
+  Displacement disp;
+  float cellDelta = 0;  // maxCellDelta(map)
+
+  // Builds the per-triangle constants; heights(T) is [hmin, hmax] over T's uv box.
+  template <typename Heights>
+  void build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights);
+  size_t bytes() const {
+    return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
+           cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
+           prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
+           (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB);
+  }
+  // The world box of triangle `prim`'s exact prism (empty when it is skipped).
+  AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
+
+  // A cheap exact reject before any per-ray set-up: true when [tmin, tmax] (with the
+  // traversal's own slack) misses the padded boxes around the inflated prism. Only for
+  // origins within the budget; beyond it, false (the full test decides).
+  bool missesPrism(uint32_t prim, const Ray& r) const {
+    const dvec3 O(r.o), D(r.d);
+    const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
+    if (!(maxO <= originBudget[prim])) return false;
+    const double tAbs = OBLONG_TRAV_T_ABS_PADS * budgetPad[prim] / glm::length(D);
+    double t0 = r.tmin - (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmin)) + tAbs);
+    double t1 = r.tmax + (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmax)) + tAbs);
+    inflatedBoxes[prim].clip(O, 1.0 / D, t0, t1);
+    if (!(t0 <= t1)) return true;
+    if (obbs[prim].valid()) obbs[prim].clip(O, D, OBLONG_TRAV_OBB_ROUND * (maxO + 1), t0, t1);
+    return !(t0 <= t1);
+  }
+};
+
+// Skipped triangles (not displaceable) are reported once per mesh.
+void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what);
+
+template <typename Heights>
+void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights) {
+  tris = std::move(triangles);
+  disp = d;
+  cellDelta = maxCellDelta(*d.map);
+  params.resize(tris.size());
+  cells.resize(tris.size());
+  frames.resize(tris.size());
+  prisms.resize(tris.size());
+  prismBoxes.resize(tris.size());
+  inflatedBoxes.resize(tris.size());
+  obbs.resize(tris.size());
+  originBudget.assign(tris.size(), -1.0);
+  budgetPad.assign(tris.size(), 0.0);
+  for (size_t i = 0; i < tris.size(); ++i) {
+    const DisplacedTriangle& T = tris[i];
+    cells[i] = cellsOverlapping(T, d);
+    const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
+    params[i] = ok ? analyzeShell(T, d, heights(T), cellDelta) : PrismParams{};
+    if (!params[i].valid) continue;
+    frames[i] = LocalFrame::make(T, d);
+    // Origins up to 16 times the triangle's own extent from the world origin (plus 16).
+    const double maxP = maxAbsVertex(T), ab = std::abs(params[i].a) + std::abs(params[i].b);
+    originBudget[i] = 16 * (maxP + ab) + 16;
+    const RayMargins m = RayMargins::make(params[i], maxP, originBudget[i]);
+    budgetPad[i] = m.boxPad;
+    prisms[i] = m.prism(frames[i], params[i]);
+    prismBoxes[i] = Prism::exact(T, params[i].a, params[i].b).bounds();
+    prismBoxes[i].pad(m.boxPad);
+    inflatedBoxes[i] = prisms[i].bounds();
+    inflatedBoxes[i].pad(m.boxPad);
+    obbs[i] = PrismOBB::around(prisms[i], T, m.boxPad);
+  }
+}
+
+}  // namespace oblong

@@ -1,0 +1,222 @@
+// The traversal's geometry (DESIGN invariants 2, 5): the allocation-free MicroCells
+// against forEachMicroTriangle, the prism and the shell analysis against the
+// micro-geometry, ψ's monotone split, and the box over a snapped rectangle.
+#include "core/microgeometry.h"
+#include "core/procedural.h"
+#include "core/stats.h"
+#include "inversion/ceres.h"
+#include "inversion/newton.h"
+#include "render/embree_scene.h"
+#include "render/intersector.h"
+#include "render/traversal/prism.h"
+#include "render/traversal/psi.h"
+#include "render/traversal/rect_bounds.h"
+#include "render/traversal/traversal.h"
+#include "strategies/quadtree.h"
+#include "strategies/splitter.h"
+
+#include "tests/traversal_cases.h"
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstring>
+#include <numbers>
+#include <random>
+
+using namespace oblong;
+using namespace oblong::test;
+
+TEST_CASE("MicroCells gives forEachMicroTriangle's triangles bit for bit", "[traversal][microgeometry]") {
+  for (const Scenario& s : {torus(), tiledQuad()}) {
+    for (size_t k = 0; k < s.tris.size(); k += 7) {
+      const DisplacedTriangle& T = s.tris[k];
+      std::vector<MicroTriangle> a, b;
+      forEachMicroTriangle(T, s.disp, [&](const MicroTriangle& m) { a.push_back(m); });
+      const MicroCells mc(T, s.disp);
+      const CellRange r = cellsOverlapping(T, s.disp);
+      MicroTriangle buf[MicroCells::kMaxPerCell];
+      for (int j = r.y0; j <= r.y1; ++j)
+        for (int i = r.x0; i <= r.x1; ++i) {
+          const int n = mc.cell(i, j, buf);
+          b.insert(b.end(), buf, buf + n);
+        }
+      REQUIRE(a.size() == b.size());
+      CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(MicroTriangle)) == 0);
+    }
+  }
+}
+
+TEST_CASE("prisms contain the micro-geometry and the shell analysis bounds bulge and projection",
+          "[traversal][prism]") {
+  const Newton newtonD;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (const Scenario& s : scenarios()) {
+    TraversalConfig bfc;
+    bfc.baseline = "bruteforce";
+    const auto bf = createIntersector(bfc, s.tris, s.disp);
+    const float delta = maxCellDelta(*s.disp.map);
+    size_t wellPosed = 0, outsideExact = 0, points = 0;
+    double maxEps = 0;
+    for (size_t k = 0; k < s.tris.size(); ++k) {
+      const DisplacedTriangle& T = s.tris[k];
+      const AABB box = bf->bounds(uint32_t(k));
+      const auto micro = microTriangles(T, s.disp);
+      // Heights as the traversal's prism gets them (exact over T's snapped uv box).
+      Interval h;
+      for (const auto& m : micro)
+        for (const auto& v : m.v) h.extend(s.disp.micro(v.uv));
+      for (const auto& m : micro)
+        for (const auto& v : m.v) REQUIRE(box.contains(v.p));
+      const PrismParams P = analyzeShell(T, s.disp, h, delta);
+      REQUIRE(P.valid);
+      if (!P.wellPosed) continue;
+      ++wellPosed;
+      const LocalFrame F = LocalFrame::make(T, s.disp);
+      maxEps = std::max({maxEps, P.eps.x, P.eps.y});
+      // Points of micro-triangles (vertices and random interior points): their preimage
+      // lies in T_δ × [a − Δs, b + Δs] and within ε of their cell.
+      for (size_t i = 0; i < micro.size(); i += 3) {
+        const MicroTriangle& m = micro[i];
+        const dvec2 s0 = s.disp.toSample(m.v[0].uv), s1 = s.disp.toSample(m.v[1].uv), s2 = s.disp.toSample(m.v[2].uv);
+        const dvec2 cell = glm::floor((s0 + s1 + s2) / 3.0);
+        for (int q = 0; q < 4; ++q) {
+          double l1 = U(rng), l2 = U(rng);
+          if (l1 + l2 > 1) l1 = 1 - l1, l2 = 1 - l2;
+          if (q == 0) l1 = l2 = 0;
+          const dvec3 X = (1 - l1 - l2) * dvec3(m.v[0].p) + l1 * dvec3(m.v[1].p) + l2 * dvec3(m.v[2].p);
+          const InversionResultD r = newtonD.invertD(X, T);
+          REQUIRE(r.converged);
+          const double sv = r.h / glm::length(F.N(r.bary));
+          const double dT = P.inflateB + 1e-9, dS = P.inflateS + 1e-9 * (1 + std::abs(sv));
+          ++points;
+          if (r.outside() > 1e-7 || sv < P.a - 1e-7 || sv > P.b + 1e-7) ++outsideExact;
+          INFO(s.name << " triangle " << k << " point " << X.x << "," << X.y << "," << X.z);
+          CHECK(r.outside() <= dT);
+          CHECK(sv >= P.a - dS);
+          CHECK(sv <= P.b + dS);
+          const dvec2 loc = F.local(r.bary) + dvec2(F.origin);
+          CHECK(loc.x >= cell.x - P.eps.x - 1e-6);
+          CHECK(loc.x <= cell.x + 1 + P.eps.x + 1e-6);
+          CHECK(loc.y >= cell.y - P.eps.y - 1e-6);
+          CHECK(loc.y <= cell.y + 1 + P.eps.y + 1e-6);
+        }
+      }
+    }
+    INFO(s.name);
+    CHECK(wellPosed == s.tris.size());
+    UNSCOPED_INFO(fmt::format("{}: {} of {} micro-triangle points lie outside the exact prism; max eps {:.3g} texels",
+                              s.name, outsideExact, points, maxEps));
+  }
+}
+
+TEST_CASE("the ray's curve is monotone between the turning points", "[traversal][psi]") {
+  const Newton inv;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  // Twisted normals (a quadratic ψ); the sphere's central normals make ψ linear (the
+  // projection of a line through the centre onto a flat triangle is a line), so it is
+  // not used here.
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(40, 40, 2));
+  Scenario s{"twisted", {}, Displacement{map, 0.1f, -0.5f, vec2(1.0f)}};
+  for (int k = 0; k < 20; ++k) {
+    std::uniform_real_distribution<float> W(-0.6f, 0.6f);
+    DisplacedTriangle T;
+    T.p[0] = vec3(0, 0, 0), T.p[1] = vec3(1, 0, 0), T.p[2] = vec3(0.3f, 1, 0);
+    for (int i = 0; i < 3; ++i) T.n[i] = glm::normalize(vec3(W(rng), W(rng), 1.0f));
+    T.t[0] = vec2(0.1f, 0.1f), T.t[1] = vec2(0.9f, 0.15f), T.t[2] = vec2(0.3f, 0.9f);
+    if (T.prepare()) s.tris.push_back(T);
+  }
+  int splits = 0, checked = 0;
+  for (int iter = 0; iter < 400; ++iter) {
+    const SurfacePoint sp = randomBasePoint(s, rng);
+    const DisplacedTriangle& T = s.tris[sp.prim];
+    const LocalFrame F = LocalFrame::make(T, s.disp);
+    // A ray through the shell near the point, any direction (half of them grazing).
+    vec3 dir = randomDir(rng);
+    if (iter % 2) dir = glm::normalize(dir - 0.95f * glm::dot(dir, sp.n) * sp.n);
+    const dvec3 O = dvec3(sp.p + 0.02f * sp.n - 2.0f * dir), D(dir);
+    const Psi psi = Psi::make(F, O, D);
+    const Prism pr = Prism::exact(T, -0.1, 0.1);
+    Prism::Crossing a, b;
+    if (pr.crossings(O, D, a, b) < 2) continue;
+    double ts[4];
+    const int n = monotoneSplits(F, psi, O, D, a.t, b.t, ts);
+    splits += n;
+    double cuts[6] = {a.t};
+    int nc = 1;
+    for (int k = 0; k < n; ++k) cuts[nc++] = ts[k];
+    cuts[nc++] = b.t;
+    for (int k = 0; k + 1 < nc; ++k) {
+      // Sample the projection densely: both coordinates monotone on each piece, and ψ ≈ 0.
+      dvec2 prev(0.0);
+      int sx = 0, sy = 0;
+      for (int q = 0; q <= 64; ++q) {
+        const double t = cuts[k] + (cuts[k + 1] - cuts[k]) * q / 64.0;
+        const InversionResultD r = inv.invertFastD(O + t * D, T);
+        const dvec2 p = F.local(r.bary);
+        CHECK(std::abs(psi.eval(p)) <= 1e-8 * (1 + glm::length(O)));
+        if (q > 0) {
+          const dvec2 d = p - prev;
+          const double tol = 1e-9 * (1 + glm::length(p));
+          if (std::abs(d.x) > tol) {
+            const int sgn = d.x > 0 ? 1 : -1;
+            CHECK((sx == 0 || sx == sgn));
+            sx = sgn;
+          }
+          if (std::abs(d.y) > tol) {
+            const int sgn = d.y > 0 ? 1 : -1;
+            CHECK((sy == 0 || sy == sgn));
+            sy = sgn;
+          }
+        }
+        prev = p;
+      }
+      ++checked;
+    }
+  }
+  CHECK(checked > 100);
+  CHECK(splits > 0);  // some rays do turn
+}
+
+TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "[traversal][prism]") {
+  std::mt19937 rng(7);
+  for (const Scenario& s : {coarseTorus(), sphere()}) {
+    const float delta = maxCellDelta(*s.disp.map);
+    for (size_t k = 0; k < s.tris.size(); k += 5) {
+      const DisplacedTriangle& T = s.tris[k];
+      const LocalFrame F = LocalFrame::make(T, s.disp);
+      const CellRange cr = cellsOverlapping(T, s.disp);
+      const auto micro = microTriangles(T, s.disp);
+      Interval hT;
+      for (const auto& m : micro)
+        for (const auto& v : m.v) hT.extend(s.disp.micro(v.uv));
+      const PrismParams P = analyzeShell(T, s.disp, hT, delta);
+      for (int q = 0; q < 20; ++q) {
+        std::uniform_int_distribution<int> X(cr.x0, cr.x1), Y(cr.y0, cr.y1);
+        int x0 = X(rng), x1 = X(rng), y0 = Y(rng), y1 = Y(rng);
+        if (x0 > x1) std::swap(x0, x1);
+        if (y0 > y1) std::swap(y0, y1);
+        // Heights over the cells' corners (exact).
+        Interval h;
+        for (int j = y0; j <= y1 + 1; ++j)
+          for (int i = x0; i <= x1 + 1; ++i) h.extend(s.disp.sampleHeight(i, j));
+        const dvec2 sb0 = s.disp.toSample(T.uvBox.lo) - dvec2(F.origin), sb1 = s.disp.toSample(T.uvBox.hi) - dvec2(F.origin);
+        const dvec2 lo = glm::max(dvec2(x0, y0) - dvec2(F.origin), sb0);
+        const dvec2 hi = glm::min(dvec2(x1 + 1, y1 + 1) - dvec2(F.origin), sb1);
+        const BoxD box = boxOverRect(F, T.minNormalLength, lo, hi, h.lo, h.hi, P.vertexErr);
+        forEachMicroTriangle(T, s.disp, CellRange{x0, y0, x1, y1}, [&](const MicroTriangle& m) {
+          for (const auto& v : m.v) {
+            const dvec3 p(v.p);
+            INFO(s.name << " triangle " << k << " cells " << x0 << ".." << x1 << " x " << y0 << ".." << y1);
+            CHECK((p.x >= box.lo.x && p.y >= box.lo.y && p.z >= box.lo.z && p.x <= box.hi.x && p.y <= box.hi.y &&
+                   p.z <= box.hi.z));
+          }
+        });
+      }
+    }
+  }
+}
+
