@@ -54,13 +54,7 @@ SurfacePoint randomBasePoint(const Mesh& m, std::mt19937& rng) {
   return {T.P(u, v), glm::normalize(T.N(u, v))};
 }
 
-vec3 randomDir(std::mt19937& rng) {
-  std::normal_distribution<float> G;
-  vec3 d;
-  do d = vec3(G(rng), G(rng), G(rng));
-  while (glm::length(d) < 1e-3f);
-  return glm::normalize(d);
-}
+using test::randomDir;
 
 // The largest |height| the displaced meshes reach (for origins above / inside the shell).
 float maxAbsHeight(const Scene& s) {

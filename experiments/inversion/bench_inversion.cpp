@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <type_traits>
 #include <memory>
 
 using namespace oblong;
@@ -60,6 +61,12 @@ std::vector<Variant> variants() {
   for (int p : {1, 0}) {
     v.push_back({fmt::format("cubic double polish={}", p), "cubic", {{"precision", "double"}, {"polish", p}}, false});
     v.push_back({fmt::format("cubic float polish={}", p), "cubic", {{"precision", "float"}, {"polish", p}}, true});
+  }
+  // Every registered inverter with its defaults, through both entry points (a new
+  // inverter is benchmarked without an edit here).
+  for (const std::string& name : inverterNames()) {
+    v.push_back({name + " defaults, double API", name, nlohmann::json::object(), false});
+    v.push_back({name + " defaults, float API", name, nlohmann::json::object(), true});
   }
   return v;
 }
@@ -107,7 +114,10 @@ void runBench(benchmark::State& state, const Inv& inv, const Dataset& d, bool fl
   size_t i = 0;
   for (auto _ : state) {
     const Sample& s = d.samples[i];
-    if (floatApi) {
+    if constexpr (std::is_same_v<Inv, Inverter>) {  // any other registered inverter
+      if (floatApi) benchmark::DoNotOptimize(inv.invert(s.Xf, d.cases[s.tri].tri));
+      else benchmark::DoNotOptimize(inv.invertD(s.X, d.cases[s.tri].tri));
+    } else if (floatApi) {
       benchmark::DoNotOptimize(inv.invertFast(s.Xf, d.cases[s.tri].tri));
     } else {
       benchmark::DoNotOptimize(inv.invertFastD(s.X, d.cases[s.tri].tri));
@@ -128,6 +138,7 @@ void registerBenchmarks(const std::vector<Dataset>& ds, const std::vector<std::s
         if (auto* p = dynamic_cast<const Newton*>(inv)) return runBench(st, *p, d, f);
         if (auto* p = dynamic_cast<const Cubic*>(inv)) return runBench(st, *p, d, f);
         if (auto* p = dynamic_cast<const CeresInverter*>(inv)) return runBench(st, *p, d, f);
+        return runBench(st, *inv, d, f);  // through the virtual entry points
       };
       benchmark::RegisterBenchmark(name.c_str(), fn);
     }

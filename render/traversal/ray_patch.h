@@ -2,16 +2,16 @@
 // (Thonat et al. 2023, Alg. 1; DESIGN §2) and the splitters' context.
 //
 // Per ray and displaced triangle (docs/traversal.md has the reasoning):
-//   1. Clip the ray to the triangle's inflated prism (render/traversal/prism.h); its crossings give
-//      the interval [tIn, tOut] and the uv of its ends; a ray starting (or ending) inside
+//   1. Clip the ray to the triangle's inflated prism (prism.h); its crossings give the
+//      interval [tIn, tOut] and the uv of its ends; a ray starting (or ending) inside
 //      gets its end's uv by inversion.
-//   2. Split [tIn, tOut] where the curve may turn (render/traversal/psi.h): monotone pieces.
+//   2. Split [tIn, tOut] where the curve may turn (psi.h): monotone pieces.
 //   3. Fixed-size stack of pieces, front to back. A piece whose rectangle is at most
 //      `marchingScale` texels is marched (below); otherwise its rectangle, dilated by ε
 //      and snapped outward to whole cells, is bounded (RangeQuery + interval arithmetic,
-//      render/traversal/rect_bounds.h), the ray is clipped to that box, the piece is optionally
-//      tightened by inverting the clipped ends (Fig. 12 "inversion during traversal"),
-//      and the splitter cuts it in two.
+//      rect_bounds.h), the ray is clipped to that box, the piece is optionally tightened
+//      by inverting the clipped ends (Fig. 12 "inversion during traversal"), and the
+//      splitter cuts it in two.
 //   4. Texel marching (§4.4): the cells within ε of the monotone piece, column by column
 //      along its major axis, front to back; ψ's crossing with each column's sides gives
 //      the rows to test. Each cell's micro-triangles come from core/microgeometry's
@@ -106,45 +106,45 @@ class RayPatch final : public SplitContext {
 
   RayPatch(const TraversalMesh& mesh, uint32_t prim, const RQ& rq, const Inv& inv, const TraversalOptions& opt,
            const Ray& ray, RayCounters& counters)
-      : T_(mesh.tris[prim]),
-        P_(mesh.params[prim]),
-        d_(mesh.disp),
+      : tri_(mesh.tris[prim]),
+        shell_(mesh.params[prim]),
+        disp_(mesh.disp),
         rq_(rq),
         inv_(inv),
         opt_(opt),
         ray_(ray),
-        c_(counters),
-        F_(mesh.frames[prim]),
-        wr_(ray),
-        O_(ray.o),
-        D_(ray.d) {
-    invD_ = 1.0 / D_;
+        counters_(counters),
+        frame_(mesh.frames[prim]),
+        watertightRay_(ray),
+        origin_(ray.o),
+        dir_(ray.d) {
+    invDir_ = 1.0 / dir_;
     const CellRange& cr = mesh.cells[prim];
-    cellLo_ = ivec2(cr.x0, cr.y0) - F_.origin;
-    cellHi_ = ivec2(cr.x1, cr.y1) - F_.origin;
-    const dvec2 s0 = d_.toSample(T_.uvBox.lo), s1 = d_.toSample(T_.uvBox.hi);
-    sbLo_ = s0 - dvec2(F_.origin);
-    sbHi_ = s1 - dvec2(F_.origin);
+    cellLo_ = ivec2(cr.x0, cr.y0) - frame_.origin;
+    cellHi_ = ivec2(cr.x1, cr.y1) - frame_.origin;
+    const dvec2 s0 = disp_.toSample(tri_.uvBox.lo), s1 = disp_.toSample(tri_.uvBox.hi);
+    uvBoxLo_ = s0 - dvec2(frame_.origin);
+    uvBoxHi_ = s1 - dvec2(frame_.origin);
     // Rounding of the watertight test itself (RayMargins). Within the origin budget the
     // precomputed prism and boxes (padded for the budget) serve; beyond it, rebuilt.
-    const double maxO = std::max({std::abs(O_.x), std::abs(O_.y), std::abs(O_.z)});
+    const double maxO = std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)});
     const double budget = mesh.originBudget[prim];
     const bool pre = maxO <= budget;
     // This ray's own margins: the dilation ε and the pads of the boxes built per step
     // (a budget-sized rayErr would widen ε by a tenth of a texel on the asteroid).
-    const RayMargins m = RayMargins::make(P_, maxAbsVertex(T_), maxO);
+    const RayMargins m = RayMargins::make(shell_, maxAbsVertex(tri_), maxO);
     boxPad_ = m.boxPad;
     // Slack for comparing float hit distances with double interval ends.
-    tAbs_ = OBLONG_TRAV_T_ABS_PADS * boxPad_ / glm::length(D_);
-    eps_ = P_.eps + P_.kxy * (OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr);
+    tSlackAbs_ = OBLONG_TRAV_T_ABS_PADS * boxPad_ / glm::length(dir_);
+    dilation_ = shell_.eps + shell_.kxy * (OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr);
     if (pre) {
       prism_ = &mesh.prisms[prim];
       prismBox_ = mesh.prismBoxes[prim];
       inflatedBox_ = mesh.inflatedBoxes[prim];
     } else {
-      ownPrism_ = m.prism(F_, P_);
+      ownPrism_ = m.prism(frame_, shell_);
       prism_ = &ownPrism_;
-      prismBox_ = Prism::exact(T_, P_.a, P_.b).bounds();
+      prismBox_ = Prism::exact(tri_, shell_.a, shell_.b).bounds();
       prismBox_.pad(boxPad_);
       inflatedBox_ = ownPrism_.bounds();
       inflatedBox_.pad(boxPad_);
@@ -164,10 +164,10 @@ class RayPatch final : public SplitContext {
       if (w[k] < lo[mi] - rp[k] || w[k] > hi[mi] + rp[k]) continue;
       const dvec2 uv = axis == 0 ? dvec2(c, w[k]) : dvec2(w[k], c);
       double t, s;
-      if (!rayParamAt(F_, O_, D_, uv, t, s)) continue;
+      if (!rayParamAt(frame_, origin_, dir_, uv, t, s)) continue;
       if (!(t > p.a.t && t < p.b.t)) continue;
       CurvePoint cp;
-      if (!makePoint(t, F_.bary(uv), s, cp)) continue;
+      if (!makePoint(t, frame_.bary(uv), s, cp)) continue;
       out = cp;
       ++found;
     }
@@ -176,12 +176,12 @@ class RayPatch final : public SplitContext {
 
   bool pointAt(const CurvePiece&, double t, CurvePoint& out) final { return invertAt(t, out); }
 
-  ivec2 sampleOrigin() const final { return F_.origin; }
+  ivec2 sampleOrigin() const final { return frame_.origin; }
 
   // --- the traversal ------------------------------------------------------------------
   template <typename Split>
   bool run(const Split& splitter) {
-    if (!P_.wellPosed) {
+    if (!shell_.wellPosed) {
       OBLONG_STAT_INC(travIllPosed);
       return runBoxOnly();
     }
@@ -189,10 +189,10 @@ class RayPatch final : public SplitContext {
     const Prism& prism = *prism_;
     const BoxD& pbox = inflatedBox_;
     double t0 = ray_.tmin - slack(ray_.tmin), t1 = ray_.tmax + slack(ray_.tmax);
-    pbox.clip(O_, invD_, t0, t1);
+    pbox.clip(origin_, invDir_, t0, t1);
     if (!(t0 <= t1)) return false;
     Prism::Crossing first, last;
-    const int nc = prism.crossings(O_, D_, first, last);
+    const int nc = prism.crossings(origin_, dir_, first, last);
     if (nc == 0) return false;  // the line misses the inflated prism
     if (nc < 2) {
       OBLONG_STAT_INC(travGrazes);
@@ -205,12 +205,12 @@ class RayPatch final : public SplitContext {
     const bool okA = tIn == first.t ? makePoint(first.t, first.bary, first.s, A) : invertAt(tIn, A);
     const bool okB = tOut == last.t ? makePoint(last.t, last.bary, last.s, B) : invertAt(tOut, B);
     if (!okA || !okB) return runBoxOnly();
-    psi_ = Psi::make(F_, O_, D_);
-    dvd_ = dirLocal();
+    psi_ = Psi::make(frame_, origin_, dir_);
+    dirLocal_ = dirLocal();
 
     // 2. Monotone pieces.
     double ts[4];
-    const int ns = monotoneSplits(F_, psi_, O_, D_, tIn, tOut, ts);
+    const int ns = monotoneSplits(frame_, psi_, origin_, dir_, tIn, tOut, ts);
     CurvePoint pts[6];
     int np = 0;
     pts[np++] = A;
@@ -224,8 +224,8 @@ class RayPatch final : public SplitContext {
     for (int k = np - 2; k >= 0; --k) pushPiece({pts[k], pts[k + 1]});
 
     // 3. Front to back.
-    while (sp_ > 0) {
-      const Entry e = stack()[--sp_];
+    while (stackSize_ > 0) {
+      const Entry e = stack()[--stackSize_];
       if (e.box) processBox(e);
       else processPiece(e.piece, splitter);
     }
@@ -245,16 +245,16 @@ class RayPatch final : public SplitContext {
   // Raw storage: a std::array<Entry> would run 128 default constructors per prism.
   Entry* stack() { return reinterpret_cast<Entry*>(stackRaw_); }
 
-  double slack(double t) const { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tAbs_; }
+  double slack(double t) const { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tSlackAbs_; }
   double bestLimit() const { return hit_.found ? double(hit_.t) + slack(hit_.t) : double(ray_.tmax) + slack(ray_.tmax); }
 
   void pushPiece(const CurvePiece& p) {
-    Entry* e = new (&stack()[sp_++]) Entry;
+    Entry* e = new (&stack()[stackSize_++]) Entry;
     e->piece = p;
     e->box = false;
   }
   void pushBox(ivec2 lo, ivec2 hi, double ta, double tb) {
-    Entry* e = new (&stack()[sp_++]) Entry;
+    Entry* e = new (&stack()[stackSize_++]) Entry;
     e->box = true;
     e->clo = lo, e->chi = hi, e->ta = ta, e->tb = tb;
   }
@@ -264,30 +264,30 @@ class RayPatch final : public SplitContext {
   // (b, s), so J(b, s_true)·(Δb, Δs) = −r exactly and |Δu| ≤ kb.x |r|, |Δv| ≤ kb.y |r|
   // while both points stay in the analysed domain.
   bool makePoint(double t, const dvec2& b, double s, CurvePoint& out) const {
-    const double dom = P_.domainB;
+    const double dom = shell_.domainB;
     if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1 + dom)) return false;
-    if (!(s >= P_.domainS0 && s <= P_.domainS1)) return false;
-    const dvec3 X = O_ + t * D_;
-    const dvec3 G = F_.G(b, s);
+    if (!(s >= shell_.domainS0 && s <= shell_.domainS1)) return false;
+    const dvec3 X = origin_ + t * dir_;
+    const dvec3 G = frame_.G(b, s);
     const double mag = std::max({std::abs(X.x), std::abs(X.y), std::abs(X.z), std::abs(G.x), std::abs(G.y),
                                  std::abs(G.z)});
     const double r = glm::length(G - X) + OBLONG_TRAV_RESIDUAL_ROUND * mag;
-    const dvec2 db = P_.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
+    const dvec2 db = shell_.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
     if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
-        !(P_.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (P_.domainS1 - P_.domainS0) + OBLONG_TRAV_TINY))
+        !(shell_.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (shell_.domainS1 - shell_.domainS0) + OBLONG_TRAV_TINY))
       return false;
     out.t = t;
-    out.uv = F_.local(b);
-    out.pad = P_.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(out.uv));
+    out.uv = frame_.local(b);
+    out.pad = shell_.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(out.uv));
     return std::isfinite(out.uv.x) && std::isfinite(out.uv.y);
   }
 
   bool invertAt(double t, CurvePoint& out) {
-    ++c_.inversions;
-    const dvec3 X = O_ + t * D_;
-    const InversionResult r = detail::invert(inv_, vec3(X), T_);
+    ++counters_.inversions;
+    const dvec3 X = origin_ + t * dir_;
+    const InversionResult r = detail::invert(inv_, vec3(X), tri_);
     const dvec2 b(r.bary);
-    const double nl = glm::length(F_.N(b));
+    const double nl = glm::length(frame_.N(b));
     if (!(nl > 0) || !std::isfinite(r.h)) {
       OBLONG_STAT_INC(travBadInversions);
       return false;
@@ -301,10 +301,10 @@ class RayPatch final : public SplitContext {
 
   // Approximate direction of the curve in local sample coordinates (ordering only).
   dvec2 dirLocal() const {
-    const dvec3 N = F_.N(dvec2(1.0 / 3.0));
-    const double det = glm::dot(F_.PX, glm::cross(F_.PY, N));
+    const dvec3 N = frame_.N(dvec2(1.0 / 3.0));
+    const double det = glm::dot(frame_.PX, glm::cross(frame_.PY, N));
     if (!(std::abs(det) > 0)) return dvec2(1.0);
-    return {glm::dot(D_, glm::cross(F_.PY, N)) / det, glm::dot(F_.PX, glm::cross(D_, N)) / det};
+    return {glm::dot(dir_, glm::cross(frame_.PY, N)) / det, glm::dot(frame_.PX, glm::cross(dir_, N)) / det};
   }
 
   // Local cells touching [lo, hi], clipped to T's cells. False when empty.
@@ -323,38 +323,38 @@ class RayPatch final : public SplitContext {
   // Ray interval [t0, t1] (clipped in place) through the box of the micro-geometry over
   // local cells [clo, chi]. False when empty.
   bool clipToCells(const ivec2& clo, const ivec2& chi, double& t0, double& t1) {
-    const SampleRange sr{clo.x + F_.origin.x, clo.y + F_.origin.y, chi.x + 1 + F_.origin.x,
-                         chi.y + 1 + F_.origin.y};
-    ++c_.rangeQueries;
-    const Interval h = d_.toHeight(detail::rawRange(rq_, sr));
-    const dvec2 lo = glm::max(dvec2(clo), sbLo_), hi = glm::min(dvec2(chi + 1), sbHi_);
-    BoxD box = boxOverRect(F_, double(T_.minNormalLength), lo, hi, h.lo, h.hi, boxPad_);
+    const SampleRange sr{clo.x + frame_.origin.x, clo.y + frame_.origin.y, chi.x + 1 + frame_.origin.x,
+                         chi.y + 1 + frame_.origin.y};
+    ++counters_.rangeQueries;
+    const Interval h = disp_.toHeight(detail::rawRange(rq_, sr));
+    const dvec2 lo = glm::max(dvec2(clo), uvBoxLo_), hi = glm::min(dvec2(chi + 1), uvBoxHi_);
+    BoxD box = boxOverRect(frame_, double(tri_.minNormalLength), lo, hi, h.lo, h.hi, boxPad_);
     box = box.intersect(prismBox_);
-    ++c_.boxes;
+    ++counters_.boxes;
     if (box.isEmpty()) return false;
-    box.clip(O_, invD_, t0, t1);
+    box.clip(origin_, invDir_, t0, t1);
     return t0 <= t1;
   }
 
   void testCell(int i, int j) {
-    ++c_.cellsMarched;
+    ++counters_.cellsMarched;
     MicroTriangle buf[MicroCells::kMaxPerCell];
     if (!cacheReady_) {  // first cell of this ray and triangle
       new (&cache_) GridVertexCache;
       cacheReady_ = true;
     }
     if (!cellsReady_) {  // built at the first cell: most prisms entered march no cell
-      new (&mcRaw_) MicroCells(T_, d_);
+      new (&mcRaw_) MicroCells(tri_, disp_);
       cellsReady_ = true;
     }
-    const int n = cells().cell(i + F_.origin.x, j + F_.origin.y, buf, cache());
-    c_.microTriangles += n;
-    for (int k = 0; k < n; ++k) hit_.test(wr_, buf[k], ray_.tmin, ray_.tmax);
+    const int n = cells().cell(i + frame_.origin.x, j + frame_.origin.y, buf, cache());
+    counters_.microTriangles += n;
+    for (int k = 0; k < n; ++k) hit_.test(watertightRay_, buf[k], ray_.tmin, ray_.tmax);
   }
   void testCells(const ivec2& clo, const ivec2& chi) {
     OBLONG_STAT_INC(travLeaves);
     // Front to back along the approximate direction (order only matters for ties).
-    const int sx = dvd_.x >= 0 ? 1 : -1, sy = dvd_.y >= 0 ? 1 : -1;
+    const int sx = dirLocal_.x >= 0 ? 1 : -1, sy = dirLocal_.y >= 0 ? 1 : -1;
     for (int j = sy > 0 ? clo.y : chi.y; sy > 0 ? j <= chi.y : j >= clo.y; j += sy)
       for (int i = sx > 0 ? clo.x : chi.x; sx > 0 ? i <= chi.x : i >= clo.x; i += sx) testCell(i, j);
   }
@@ -395,17 +395,17 @@ class RayPatch final : public SplitContext {
     const int ax = std::abs(d.x) >= std::abs(d.y) ? 0 : 1, mi = 1 - ax;
     const dvec2 lo = p.lo(), hi = p.hi();
     ivec2 clo, chi;
-    if (!snap(lo - eps_, hi + eps_, clo, chi)) return;
+    if (!snap(lo - dilation_, hi + dilation_, clo, chi)) return;
     const int sa = d[ax] >= 0 ? 1 : -1, sm = d[mi] >= 0 ? 1 : -1;
     for (int k = sa > 0 ? clo[ax] : chi[ax]; sa > 0 ? k <= chi[ax] : k >= clo[ax]; k += sa) {
       // The piece's points whose major coordinate is within ε of column k.
-      const double c0 = std::max(k - eps_[ax], lo[ax]), c1 = std::min(k + 1 + eps_[ax], hi[ax]);
+      const double c0 = std::max(k - dilation_[ax], lo[ax]), c1 = std::min(k + 1 + dilation_[ax], hi[ax]);
       if (c0 > c1) continue;
       double a0, a1, b0, b1;
       minorAt(p, ax, c0, a0, a1);
       minorAt(p, ax, c1, b0, b1);
       // Monotone: in between, the minor coordinate lies between its values at c0 and c1.
-      const double wlo = std::min(a0, b0) - eps_[mi], whi = std::max(a1, b1) + eps_[mi];
+      const double wlo = std::min(a0, b0) - dilation_[mi], whi = std::max(a1, b1) + dilation_[mi];
       const double eta = OBLONG_TRAV_SNAP_ETA * (1 + std::abs(wlo) + std::abs(whi));
       const int j0 = std::max(int(std::floor(wlo - eta)), clo[mi]), j1 = std::min(int(std::floor(whi + eta)), chi[mi]);
       for (int j = sm > 0 ? j0 : j1; sm > 0 ? j <= j1 : j >= j0; j += sm) {
@@ -428,7 +428,7 @@ class RayPatch final : public SplitContext {
     };
     if (small()) return march(p);
     ivec2 clo, chi;
-    if (!snap(p.lo() - eps_, p.hi() + eps_, clo, chi)) return;
+    if (!snap(p.lo() - dilation_, p.hi() + dilation_, clo, chi)) return;
     double t0 = p.a.t, t1 = std::min(p.b.t, bestLimit());
     if (!clipToCells(clo, chi, t0, t1)) return;
     if (opt_.inversionInTraversal) {
@@ -441,7 +441,7 @@ class RayPatch final : public SplitContext {
       if (small()) return march(p);
     }
     CurvePiece front, back;
-    if (sp_ + 2 > kStack) {
+    if (stackSize_ + 2 > kStack) {
       OBLONG_STAT_INC(travOverflows);
       return march(p);  // correct, just not hierarchical
     }
@@ -462,7 +462,7 @@ class RayPatch final : public SplitContext {
       return testCells(e.clo, e.chi);
     double t0 = e.ta, t1 = std::min(e.tb, limit);
     if (!clipToCells(e.clo, e.chi, t0, t1)) return;
-    if (sp_ + 2 > kStack) {
+    if (stackSize_ + 2 > kStack) {
       OBLONG_STAT_INC(travOverflows);
       return testCells(e.clo, e.chi);
     }
@@ -472,7 +472,7 @@ class RayPatch final : public SplitContext {
     aHi[ax] = mid;
     bLo[ax] = mid + 1;
     // Lower half first when the ray runs towards +axis (order matters for speed only).
-    if (dvd_[ax] >= 0) {
+    if (dirLocal_[ax] >= 0) {
       pushBox(bLo, e.chi, t0, t1);
       pushBox(e.clo, aHi, t0, t1);
     } else {
@@ -485,41 +485,43 @@ class RayPatch final : public SplitContext {
   bool runBoxOnly() {
     OBLONG_STAT_INC(travBoxOnlyPrisms);
     double t0 = ray_.tmin - slack(ray_.tmin), t1 = bestLimit();
-    prismBox_.clip(O_, invD_, t0, t1);
+    prismBox_.clip(origin_, invDir_, t0, t1);
     if (!(t0 <= t1)) return hit_.found;
-    dvd_ = dirLocal();
-    sp_ = 0;
+    dirLocal_ = dirLocal();
+    stackSize_ = 0;
     pushBox(cellLo_, cellHi_, t0, t1);
-    while (sp_ > 0) {
-      const Entry e = stack()[--sp_];
+    while (stackSize_ > 0) {
+      const Entry e = stack()[--stackSize_];
       processBox(e);
     }
     return hit_.found;
   }
 
-  const DisplacedTriangle& T_;
-  const PrismParams& P_;
-  const Displacement& d_;
+  // The triangle and what was precomputed for it (TraversalMesh).
+  const DisplacedTriangle& tri_;
+  const PrismParams& shell_;  // shell analysis: heights [a, b], bulge, ε, error bounds
+  const Displacement& disp_;
   const RQ& rq_;
   const Inv& inv_;
   const TraversalOptions& opt_;
   const Ray& ray_;
-  RayCounters& c_;
-  const LocalFrame& F_;
-  const WatertightRay wr_;
-  const dvec3 O_, D_;
-  dvec3 invD_;
-  ivec2 cellLo_, cellHi_;
-  dvec2 sbLo_, sbHi_;
-  double boxPad_ = 0, tAbs_ = 0;
-  dvec2 eps_{0.0};
-  const Prism* prism_ = nullptr;
+  RayCounters& counters_;
+  const LocalFrame& frame_;  // P, N, barycentrics over local sample coordinates
+  const WatertightRay watertightRay_;
+  // The ray in double, and what it needs per triangle.
+  const dvec3 origin_, dir_;
+  dvec3 invDir_;
+  ivec2 cellLo_, cellHi_;    // the triangle's cells, local sample coordinates
+  dvec2 uvBoxLo_, uvBoxHi_;  // the triangle's uv box, local sample coordinates
+  double boxPad_ = 0, tSlackAbs_ = 0;
+  dvec2 dilation_{0.0};      // ε: cells within it of the curve are marched
+  const Prism* prism_ = nullptr;  // inflated prism: precomputed, or ownPrism_ for far origins
   Prism ownPrism_;
   BoxD prismBox_, inflatedBox_;
-  Psi psi_;
-  dvec2 dvd_{1.0};
+  Psi psi_;                  // the ray's implicit curve in texture space (Eq. 3)
+  dvec2 dirLocal_{1.0};      // approximate curve direction (front-to-back order)
   ClosestHit hit_;
-  int sp_ = 0;
+  int stackSize_ = 0;
   alignas(Entry) unsigned char stackRaw_[kStack * sizeof(Entry)];
   // Micro-vertices shared by neighbouring cells; initialised at the first cell only.
   bool cacheReady_ = false;
