@@ -63,13 +63,6 @@ Scenario rotatedUVs() {  // mirrored, rotated, negative uvs: the grid is not ali
   return {"rotated mirrored uvs", trianglesOf(m), Displacement{map, 0.08f, -0.5f, vec2(2.0f, 3.0f)}};
 }
 
-Scenario farFineMap() {
-  Mesh m = quadMesh(0.1f, 0.0f, 1);
-  for (vec3& p : m.positions) p += vec3(1e4f, -3e3f, 2e4f);
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 64, 13));
-  return {"far, fine map", trianglesOf(m), Displacement{map, 0.3f, -0.5f, vec2(8.0f, 8.0f)}};
-}
-
 std::vector<Scenario> scenarios() { return {tiledQuad(), torus(), coarseTorus(), sphere()}; }
 std::vector<Scenario> stiffScenarios() { return {twisted(), deepSphere(), highTiling(), farAway(), rotatedUVs()}; }
 

@@ -33,11 +33,6 @@ Scenario deepSphere();
 Scenario highTiling();
 Scenario farAway();
 Scenario rotatedUVs();
-// Not among the stiff cases: a small quad 1e4 from the origin under a fine map (a texel
-// is smaller than the float rounding of points there), so the curve points of float
-// inversions carry pads of texels and dominate small rectangles (RayPatch::processPiece's
-// "pads dominate" test, which the other scenarios never reach).
-Scenario farFineMap();
 std::vector<Scenario> scenarios();       // tiledQuad, torus, coarseTorus, sphere
 std::vector<Scenario> stiffScenarios();  // the five stiff cases
 

@@ -1,10 +1,12 @@
 // The traversal's and the inverter's numerical constants, defined once for the CPU
-// (render/traversal/traversal.h, inversion/newton.h) and the Vulkan shaders
-// (render/vulkan/shaders/traversal.glsl, which mirrors RayPatch and Newton::solve line by
-// line). This header is both C++ and GLSL: plain #defines with literal values, nothing
-// else. Change a value here and both sides change; a literal changed on one side only is
-// caught by the CPU/GPU parity test ("[vulkan]", tests/vulkan_test.cpp: same hits and
-// the same per-ray work on one-triangle scenes; docs/vulkan.md).
+// (render/traversal/ray_patch.h, render/traversal/traversal_mesh.h, inversion/newton.h)
+// and the Vulkan shaders (render/vulkan/shaders/traversal.glsl, which mirrors
+// TraversalMesh::missesPrism, RayPatch and Newton::solve line by line). This header is
+// both C++ and GLSL: plain #defines with literal values, nothing else. Change a value
+// here and both sides change; a literal changed on one side only is caught by the
+// CPU/GPU contract test ("[vulkan]", tests/vulkan_test.cpp: same hits and the same
+// per-ray work on one-triangle scenes; docs/vulkan.md "The contract") wherever it changes
+// a count or a hit.
 //
 // Literals: an unsuffixed literal is a double in C++ and a float in GLSL. In the shaders
 // these constants are used in double expressions (or float ones where the CPU uses
@@ -12,15 +14,14 @@
 // own double value (the SPIR-V holds the double 1e-05, not the float 1e-05f), so both
 // sides compute with the same values.
 //
-// Constants the shaders mirror that are NOT here yet, because their CPU code lives in
-// files outside this change (render/traversal/psi.h quadraticRoots and rayParamAt, render/traversal/prism.cpp
-// Prism::crossings, render/traversal/rect_bounds.h boxOverRect, inversion/cubic.h polyRoots and
-// cubicSolve, the newton default tolerance parsed in inversion/newton.cpp): see
-// docs/vulkan.md "What is shared".
+// Not here yet: the literals of render/traversal/psi.h (quadraticRoots, rayParamAt),
+// prism.cpp (Prism::crossings), rect_bounds.h (boxOverRect) and inversion/cubic.h
+// (polyRoots, cubicSolve) are still written on both sides, held only by the parity test
+// (docs/vulkan.md, "The contract").
 #ifndef OBLONG_TRAVERSAL_CONSTANTS_H
 #define OBLONG_TRAVERSAL_CONSTANTS_H
 
-// ---- RayPatch (render/traversal/traversal.h) -------------------------------------------------------
+// ---- RayPatch and TraversalMesh (render/traversal/ray_patch.h, traversal_mesh.h) ----------
 
 // Entries of the per-ray, per-prism stack of pieces / box ranges (RayPatch::kStack). A push
 // that would overflow marches (or tests the cells of) the current piece instead: correct,

@@ -1,8 +1,8 @@
-// The RMIP layers (strategies/rmip.h) laid out for the GPU: one flat array of (min, max)
-// entries and a layer table, exactly as Rmip stores them (same build, same compressed
-// corner blocks), so that the shader's query returns the CPU's interval bit for bit.
-// Rmip keeps its storage private, so the layout is rebuilt here with the same algorithm
-// (strategies/rmip.cpp) and checked against Rmip::rawRange by tests/vulkan_test.cpp.
+// The RMIP layers (strategies/rmip.h) laid out for the GPU: the built Rmip's own entries
+// and layer table (Rmip::layerEntries(), Rmip::layerTable()) in the shader's formats, so the
+// shader's query reads exactly the CPU's data and returns the CPU's interval bit for bit.
+// RmipLayout::rawRange is the shader's lookup (traversal.glsl rmipRawRange) on the host,
+// checked against Rmip's own query by tests/vulkan_test.cpp.
 #pragma once
 
 #include "core/heightmap.h"
@@ -11,16 +11,20 @@
 
 #include <vector>
 
+namespace oblong {
+class Rmip;
+}
+
 namespace oblong::vk {
 
 struct RmipLayout {
   int f = 1, rw = 0, rh = 0, P = 0, Q = 0;  // downsample, pixels, top layer indices
   bool wrap = false;
-  std::vector<glm::vec2> data;      // (lo, hi) raw texels
+  std::vector<glm::vec2> data;      // (lo, hi) raw texels: Rmip::layerEntries()
   std::vector<glm::ivec4> layers;   // (offset, nx, shiftX, shiftY), index p * (Q + 1) + q
 
-  // resolution / compression: Rmip::Options (the scene's rmip parameters).
-  static RmipLayout build(const HeightMap& m, const QueryNeeds& needs, int resolution, int compression);
+  // A copy of the built Rmip's pyramid (the CPU traversal's own range query).
+  static RmipLayout of(const Rmip& rmip);
   // The shader's query (render/vulkan/shaders/traversal.glsl rmipRawRange) on the host.
   Interval rawRange(const HeightMap& m, const SampleRange& r) const;
   size_t bytes() const { return data.size() * sizeof(glm::vec2) + layers.size() * sizeof(glm::ivec4); }

@@ -41,8 +41,8 @@ using uint = uint32_t;
 #define OBLONG_HITGROUP_PRISM 0
 #define OBLONG_HITGROUP_TRIANGLES 1
 
-// Traversal stack entries per ray and prism (render/traversal/traversal.h RayPatch::kStack).
-#define OBLONG_STACK 128
+// The traversal's constants (stack size, slacks, Newton's tolerance, ...) are in
+// render/traversal/constants.h, shared with the CPU traversal and inversion/newton.h.
 
 // One ray, laid out as the CPU's Ray (o, d, tmin, tmax): ray buffers are copied as is.
 struct RayGpu {
@@ -69,7 +69,7 @@ struct CountersGpu {
 };
 
 // One displaced base triangle: DisplacedTriangle, its PrismParams, LocalFrame and the
-// MicroCells constants (render/traversal/traversal.h, render/traversal/psi.h, core/microgeometry.h),
+// MicroCells constants (render/traversal/traversal_mesh.h, psi.h, core/microgeometry.h),
 // precomputed on the host by the very code the CPU runs.
 struct TriGpu {
   // LocalFrame: P = Pc + PX X + PY Y, N = Nc + NX X + NY Y over local sample coordinates.
@@ -78,12 +78,14 @@ struct TriGpu {
   dvec3 p0d, e1, e2, n0d, f1, f2;  // F.P(b) = p0 + e1 u + e2 v, F.N(b) = n0 + f1 u + f2 v
   dvec3 boxLo, boxHi;       // exact prism box, unpadded (Prism::exact(T, a, b).bounds())
   dvec3 boxPadLo, boxPadHi; // TraversalMesh::prismBoxes (padded for origins within budget)
+  dvec3 infPadLo, infPadHi; // TraversalMesh::inflatedBoxes (padded likewise; missesPrism)
+  dvec3 obbAxis[3], obbLo, obbHi;  // TraversalMesh::obbs (PrismOBB; missesPrism)
   dvec2 bc, bX, bY;         // barycentrics (u, v) = bc + bX X + bY Y
   dvec2 sc, sU, sV;         // local sample coordinates (X, Y) = sc + sU u + sV v
   dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates
   dvec2 S[3];               // MicroCells::S_: vertices in (absolute) sample coordinates
   dvec2 kb, kxy, eps;       // PrismParams: residual bounds and the cell dilation ε
-  double vertexErr, a, b, budget, maxP, minNormalLength;
+  double vertexErr, a, b, budget, budgetPad, maxP, minNormalLength;  // budgetPad: TraversalMesh::budgetPad
   double inflateB, inflateS, ks, domainB, domainS0, domainS1;
   vec3 p[3], n[3];          // DisplacedTriangle (float, as MicroCells reads it)
   vec2 t[3];
@@ -94,6 +96,7 @@ struct TriGpu {
   ivec2 cellLo, cellHi;     // T's cells, local (cellsOverlapping − origin)
   ivec4 edgeA, edgeB;       // MicroCells::E_[e].A / .B (canonical endpoint order)
   int valid, wellPosed;
+  int obbValid, pad1;       // PrismOBB::valid()
 };
 
 // One mesh of the scene (the TLAS instance's custom index).

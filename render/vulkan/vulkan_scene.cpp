@@ -1,6 +1,6 @@
 // Vulkan ray tracing path: device, buffers, acceleration structures, pipeline, dispatch.
 // The traversal itself is in shaders/ (GLSL); the per-triangle constants it reads are
-// taken from the CPU's own TraversalMesh (render/traversal/traversal.h), built by the same
+// taken from the CPU's own TraversalMesh (render/traversal/traversal_mesh.h), built by the same
 // createIntersector call that EmbreeScene makes, so both paths start from identical
 // numbers. See docs/vulkan.md.
 #include "render/vulkan/vulkan_scene.h"
@@ -12,6 +12,7 @@
 #include "render/traversal/traversal.h"
 #include "render/vulkan/rmip_layout.h"
 #include "render/vulkan/shared.h"
+#include "strategies/rmip.h"
 
 #include <fmt/format.h>
 #include <vulkan/vulkan.h>
@@ -28,7 +29,7 @@ namespace oblong::vk {
 using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 32 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
-static_assert(sizeof(TriGpu) == 928 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
+static_assert(sizeof(TriGpu) == 1112 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
 static_assert(sizeof(MeshGpu) == 88 && sizeof(PushGpu) == 16);
 static_assert(sizeof(Ray) == 32 && offsetof(Ray, d) == offsetof(RayGpu, d) && offsetof(Ray, tmin) == offsetof(RayGpu, tmin) &&
                   offsetof(Ray, tmax) == offsetof(RayGpu, tmax),
@@ -93,6 +94,12 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   const BoxD exact = Prism::exact(T, P.a, P.b).bounds();
   g.boxLo = exact.lo, g.boxHi = exact.hi;
   g.boxPadLo = tm.prismBoxes[i].lo, g.boxPadHi = tm.prismBoxes[i].hi;
+  g.infPadLo = tm.inflatedBoxes[i].lo, g.infPadHi = tm.inflatedBoxes[i].hi;
+  const PrismOBB& obb = tm.obbs[i];
+  for (int k = 0; k < 3; ++k) g.obbAxis[k] = obb.axis[k];
+  g.obbLo = obb.lo, g.obbHi = obb.hi;
+  g.obbValid = obb.valid();
+  g.budgetPad = tm.budgetPad[i];
   g.bc = F.bc, g.bX = F.bX, g.bY = F.bY, g.sc = F.sc, g.sU = F.sU, g.sV = F.sV;
   g.sbLo = d.toSample(T.uvBox.lo) - dvec2(F.origin);
   g.sbHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
@@ -610,11 +617,7 @@ VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
     }
     const Displacement& d = *sm.displacement;
     std::vector<DisplacedTriangle> dts(mesh.triangles.size());
-    std::vector<Rect> boxes;
-    for (size_t ti = 0; ti < dts.size(); ++ti) {
-      dts[ti] = mesh.triangle(ti);
-      if (dts[ti].uvArea2 != 0.0f) boxes.push_back(dts[ti].uvBox);
-    }
+    for (size_t ti = 0; ti < dts.size(); ++ti) dts[ti] = mesh.triangle(ti);
     const auto is = createIntersector(cfg, dts, d);
     const auto* trav = dynamic_cast<const TraversalIntersectorBase*>(is.get());
     if (!trav) fail("--device vulkan", "internal: the canonical intersector is not a traversal");
@@ -627,11 +630,10 @@ VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
     m.scale = d.scale, m.bias = d.bias, m.tiling = d.tiling;
     m.marchingScale = cfg.marchingScale;
     m.inversionInTraversal = cfg.inversionInTraversal;
-    // The same Rmip options and needs as createIntersector.
-    ParamSet rps(cfg.rangeParams, "strategies.range");
-    const int resolution = rps.getInRange<int>("resolution", 0, 0, 1 << 24);
-    const int compression = rps.getInRange<int>("compression", 1, 0, 1000);
-    const RmipLayout L = RmipLayout::build(*d.map, QueryNeeds::forRects(d, boxes), resolution, compression);
+    // The CPU traversal's own Rmip (built by createIntersector above), copied as it is.
+    const auto* rmip = dynamic_cast<const Rmip*>(&trav->rangeQuery());
+    if (!rmip) fail("--device vulkan", "internal: the canonical intersector's range query is not rmip");
+    const RmipLayout L = RmipLayout::of(*rmip);
     m.rmipData = uint32_t(rmipData.size());
     m.rmipLayers = uint32_t(rmipLayers.size());
     m.rmipF = L.f, m.rmipW = L.rw, m.rmipH = L.rh, m.rmipP = L.P, m.rmipQ = L.Q, m.rmipWrap = L.wrap;

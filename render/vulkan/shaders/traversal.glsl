@@ -1,8 +1,11 @@
-// The per-ray, per-prism traversal (render/traversal/traversal.h's RayPatch) in GLSL, for the
-// intersection shader. Mirrors the CPU code function by function (same names, same
-// order of operations, double where the CPU uses double, float where it uses float).
+// The per-ray, per-prism traversal (render/traversal/ray_patch.h's RayPatch) in GLSL, for
+// the intersection shader. Mirrors the CPU code function by function (same names, same
+// order of operations, double where the CPU uses double, float where it uses float), with
+// the CPU's constants (render/traversal/constants.h). tests/vulkan_test.cpp holds it to
+// the CPU step for step: same hits and the same per-ray work on one-triangle scenes.
 //
-// What runs: RayPatch::run for well-posed triangles — ray / inflated prism crossings,
+// What runs: TraversalMesh::missesPrism (the early reject), then RayPatch::run for
+// well-posed triangles — ray / inflated prism crossings,
 // the curve's monotone pieces (ψ turning points, inversion), a stack of pieces front to
 // back, RMIP range query + conservative box + ray clip per piece, inversion during
 // traversal, midpoint2d splits (closed-form crossing of ψ with the middle line, else the
@@ -17,6 +20,8 @@
 // inlined size, so each large piece of code has one call site: the cells to test come
 // from one generator (nextCell: a box range or a marched piece), tested at one place in
 // runLoop.
+
+#include "../../traversal/constants.h"  // shared with the CPU traversal and inversion/newton.h
 
 #define kInfF uintBitsToFloat(0x7f800000u)
 #define kInfD double(kInfF)
@@ -175,7 +180,7 @@ void boxOverRect(double m, dvec2 lo, dvec2 hi, double hlo, double hhi, double pa
 }
 
 // ---- RayPatch helpers -----------------------------------------------------------------
-double slack(double t) { return 1e-5 * abs(t) + g_tAbs; }
+double slack(double t) { return OBLONG_TRAV_SLACK_REL * abs(t) + g_tAbs; }
 double bestLimit() { return g_found ? double(g_hitT) + slack(double(g_hitT)) : double(g_tmax) + slack(double(g_tmax)); }
 
 dvec2 dirLocal() {
@@ -509,11 +514,13 @@ bool makePoint(double t, dvec2 b, double s, out CurvePoint outp) {
   precise dvec3 X = g_O + t * g_D;
   precise dvec3 G = frameP(b) + s * frameN(b);
   double mag = max(max(max(abs(X.x), abs(X.y)), max(abs(X.z), abs(G.x))), max(abs(G.y), abs(G.z)));
-  precise double r = lengthD(G - X) + 1e-14 * mag;
-  precise dvec2 db = TRI.kb * r * 1.001;
-  if (!(db.x + db.y < 0.01) || !(TRI.ks * r < 0.01 * (TRI.domainS1 - TRI.domainS0) + 1e-300)) return false;
+  precise double r = lengthD(G - X) + OBLONG_TRAV_RESIDUAL_ROUND * mag;
+  precise dvec2 db = TRI.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
+  if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
+      !(TRI.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (TRI.domainS1 - TRI.domainS0) + OBLONG_TRAV_TINY))
+    return false;
   outp.uv = frameLocal(b);
-  precise dvec2 pad = TRI.kxy * (r * 1.001) + 1e-9 * (1.0 + abs(outp.uv));
+  precise dvec2 pad = TRI.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + abs(outp.uv));
   outp.pad = pad;
   return finiteD(outp.uv.x) && finiteD(outp.uv.y);
 }
@@ -636,10 +643,11 @@ int polyRoots(float a0, float a1, float a2, float a3, out float x[3]) {
   return kept;
 }
 
-// Newton::solve<float>: inv::newtonSolve from (1/3, 1/3, 0) (tolerance 1e-5, 10
-// iterations); if that is not converged or outside T by more than 1e-5, inv::cubicSolve
-// (the root whose offset-triangle barycentrics are inside T, then one polishing Newton
-// step). One Newton-step site for both passes.
+// Newton::solve<float>: inv::newtonSolve from (1/3, 1/3, 0) (OBLONG_NEWTON_TOLERANCE,
+// OBLONG_NEWTON_MAX_ITERATIONS); if that is not converged or outside T by more than
+// OBLONG_NEWTON_OUTSIDE_EPS, inv::cubicSolve (the root whose offset-triangle barycentrics
+// are inside T, then OBLONG_NEWTON_FALLBACK_POLISH polishing Newton steps). One
+// Newton-step site for both passes.
 void invertFloat(vec3 X, out vec2 bary, out float h) {
   precise vec3 e1 = TRI.p[1] - TRI.p[0], e2 = TRI.p[2] - TRI.p[0];
   precise vec3 n0 = TRI.n[0], f1 = TRI.n[1] - TRI.n[0], f2 = TRI.n[2] - TRI.n[0];
@@ -647,14 +655,14 @@ void invertFloat(vec3 X, out vec2 bary, out float h) {
   precise float L = sqrt(max(max(dotF(e1, e1), dotF(e2, e2)), dotF(e3, e3)));
   precise vec3 W = X - TRI.p[0];
   precise float u = 1.0 / 3.0, v = 1.0 / 3.0, s = 0.0;
-  const float tol = 1e-5;
+  const float tol = OBLONG_NEWTON_TOLERANCE;
   bool conv = false;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) {
       precise float hh = s * lengthF(n0 + u * f1 + v * f2);
       precise float outside = max(max(0.0, -u), max(-v, u + v - 1.0));
       bool converged = conv && finiteF(u) && finiteF(v) && finiteF(hh);
-      if (converged && outside <= 1e-5) break;  // Newton's result stands
+      if (converged && outside <= OBLONG_NEWTON_OUTSIDE_EPS) break;  // Newton's result stands
       // inv::cubicSolve<float>(X, T, 1)
       precise float iL = 1.0 / L;
       precise vec3 e1s = e1 * iL, e2s = e2 * iL, w = W * iL;
@@ -695,7 +703,8 @@ void invertFloat(vec3 X, out vec2 bary, out float h) {
       v = bv;
       s = bs * L;
     }
-    for (int it = 0; it < (pass == 0 ? 10 : 1); ++it) {  // inv::newtonStep
+    int steps = pass == 0 ? OBLONG_NEWTON_MAX_ITERATIONS : OBLONG_NEWTON_FALLBACK_POLISH;
+    for (int it = 0; it < steps; ++it) {  // inv::newtonStep
       precise vec3 N = n0 + u * f1 + v * f2;
       precise vec3 r = e1 * u + e2 * v + s * N - W;
       precise vec3 a = e1 + s * f1, b = e2 + s * f2;
@@ -766,7 +775,7 @@ struct Entry {
   double ta, tb;    // box mode: ray interval
   bool box;
 };
-Entry g_st[OBLONG_STACK];
+Entry g_st[OBLONG_TRAV_STACK];
 int g_sp;
 
 void pushPiece(CurvePoint a, CurvePoint b) {
@@ -785,9 +794,9 @@ void pushBox(ivec2 lo, ivec2 hi, double ta, double tb) {
 
 // RayPatch::snap: local cells touching [lo, hi], clipped to T's cells.
 bool snapCells(dvec2 lo, dvec2 hi, out ivec2 clo, out ivec2 chi) {
-  double lim = 1e9;
+  double lim = OBLONG_TRAV_SNAP_LIMIT;
   for (int k = 0; k < 2; ++k) {
-    precise double eta = 1e-9 * (1.0 + abs(lo[k]) + abs(hi[k]));
+    precise double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(lo[k]) + abs(hi[k]));
     clo[k] = int(clamp(floor(lo[k] - eta), -lim, lim));
     chi[k] = int(clamp(floor(hi[k] + eta), -lim, lim));
   }
@@ -842,7 +851,7 @@ void minorAt(double c, out double wlo, out double whi) {
   whi = -kInfD;
   for (int k = 0; k < 2; ++k) {
     CurvePoint e = k == 0 ? g_ma : g_mb;
-    if (abs(c - e.uv[ax]) <= e.pad[ax] * 1.0000001 + 1e-12) {
+    if (abs(c - e.uv[ax]) <= e.pad[ax] * OBLONG_TRAV_END_PAD_REL + OBLONG_TRAV_END_PAD_ABS) {
       wlo = min(wlo, e.uv[mi] - e.pad[mi]);
       whi = max(whi, e.uv[mi] + e.pad[mi]);
     }
@@ -895,7 +904,7 @@ bool nextCell(out int ci, out int cj) {
       double r[4];
       for (int k = 0; k < 2; ++k) minorAt(k == 0 ? c0 : c1, r[2 * k], r[2 * k + 1]);
       precise double wlo = min(r[0], r[2]) - g_eps[mi], whi = max(r[1], r[3]) + g_eps[mi];
-      precise double eta = 1e-9 * (1.0 + abs(wlo) + abs(whi));
+      precise double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(wlo) + abs(whi));
       g_mJ0 = max(int(floor(wlo - eta)), g_gLo[mi]);
       g_mJ1 = min(int(floor(whi + eta)), g_gHi[mi]);
       g_mJ = g_mSm > 0 ? g_mJ0 : g_mJ1;
@@ -918,7 +927,7 @@ bool pieceSmall(CurvePoint a, CurvePoint b) {
   dvec2 ext = pieceHi(a, b) - pieceLo(a, b);
   dvec2 pads = a.pad + b.pad;
   int la = ext.x >= ext.y ? 0 : 1;
-  return ext[la] <= double(g_mesh.marchingScale) || pads[la] > 0.25 * ext[la];
+  return ext[la] <= double(g_mesh.marchingScale) || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
 }
 bool strictlyBetween(CurvePoint a, CurvePoint b, int axis, double c) {
   double x0 = min(a.uv[axis], b.uv[axis]), x1 = max(a.uv[axis], b.uv[axis]);
@@ -939,7 +948,7 @@ void processPiece(CurvePoint a, CurvePoint b) {
   // during traversal, their projections can give a much smaller rectangle), then the
   // midpoint2d split — the crossing with the middle of the longer side, else of the
   // other side (split::middleCrossing), else the t-midpoint by inversion.
-  precise double minGain = 1e-3 * (b.t - a.t);
+  precise double minGain = OBLONG_TRAV_MIN_GAIN * (b.t - a.t);
   CurvePoint m;
   bool ok = false;
   for (int e = g_mesh.inversionInTraversal != 0 ? 0 : 2; e < 3; ++e) {
@@ -949,7 +958,7 @@ void processPiece(CurvePoint a, CurvePoint b) {
       need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
       t = e == 0 ? t0 : t1;
     } else {
-      if (pieceSmall(a, b) || g_sp + 2 > OBLONG_STACK) {  // overflow: correct, just not hierarchical
+      if (pieceSmall(a, b) || g_sp + 2 > OBLONG_TRAV_STACK) {  // overflow: correct, just not hierarchical
         startMarch(a, b);
         return;
       }
@@ -987,13 +996,13 @@ void processBox(ivec2 clo, ivec2 chi, double ta, double tb) {
   double limit = bestLimit();
   if (ta > limit) return;
   ivec2 n = chi - clo + 1;
-  if (float(max(n.x, n.y)) <= max(1.0, g_mesh.marchingScale)) {
+  if (float(max(n.x, n.y)) <= max(float(OBLONG_TRAV_MIN_BOX_CELLS), g_mesh.marchingScale)) {
     startCells(clo, chi);
     return;
   }
   double t0 = ta, t1 = min(tb, limit);
   if (!clipToCells(clo, chi, t0, t1)) return;
-  if (g_sp + 2 > OBLONG_STACK) {
+  if (g_sp + 2 > OBLONG_TRAV_STACK) {
     startCells(clo, chi);
     return;
   }
@@ -1049,8 +1058,9 @@ int setupCurve() {
   // TraversalMesh precomputes for origins within the budget, else the ray's own.
   precise double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
   bool pre = maxO <= TRI.budget;
-  precise double rayErr = 1e-6 * (TRI.maxP + (pre ? TRI.budget : maxO) + abs(TRI.a) + abs(TRI.b));
-  precise double extraB = (TRI.kb.x + TRI.kb.y) * 2.0 * rayErr, extraS = TRI.ks * 2.0 * rayErr;
+  precise double rayErr = OBLONG_TRAV_RAY_ERR * (TRI.maxP + (pre ? TRI.budget : maxO) + abs(TRI.a) + abs(TRI.b));
+  precise double extraB = (TRI.kb.x + TRI.kb.y) * double(OBLONG_TRAV_RAY_ERR_FACTOR) * rayErr,
+                 extraS = TRI.ks * double(OBLONG_TRAV_RAY_ERR_FACTOR) * rayErr;
   makePrism(TRI.a - TRI.inflateS - extraS, TRI.b + TRI.inflateS + extraS, TRI.inflateB + extraB);
   dvec3 plo, phi;
   prismBounds(pre ? TRI.vertexErr + rayErr : g_boxPad, plo, phi);
@@ -1094,12 +1104,47 @@ int setupCurve() {
 bool runPatch() {
   g_gen = 0;
   g_sp = 0;
-  g_eps = TRI.eps + TRI.kxy * (2.0 * (1e-6 * (TRI.maxP + max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z)) +
-                                              abs(TRI.a) + abs(TRI.b))));
+  g_eps = TRI.eps + TRI.kxy * (double(OBLONG_TRAV_RAY_ERR_FACTOR) *
+                               (OBLONG_TRAV_RAY_ERR * (TRI.maxP + max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z)) +
+                                                       abs(TRI.a) + abs(TRI.b))));
   int r = setupCurve();
   if (r == 1) setupBoxOnly();
   if (r != 0) runLoop();
   return g_found;
+}
+
+// TraversalMesh::missesPrism (render/traversal/traversal_mesh.h), which Traversal::intersect runs before
+// RayPatch: a cheap exact reject for origins within the budget, [tmin, tmax] with the
+// traversal's slack against the padded box of the inflated prism, then the oriented box
+// around it (PrismOBB::clip). The host's own boxes (TriGpu infPad*, obb*).
+bool missesPrism() {
+  double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
+  if (!(maxO <= TRI.budget)) return false;
+  precise double tAbs = double(OBLONG_TRAV_T_ABS_PADS) * TRI.budgetPad / lengthD(g_D);
+  precise double t0 = double(g_tmin) - (OBLONG_TRAV_SLACK_REL * abs(double(g_tmin)) + tAbs);
+  precise double t1 = double(g_tmax) + (OBLONG_TRAV_SLACK_REL * abs(double(g_tmax)) + tAbs);
+  clipBox(TRI.infPadLo, TRI.infPadHi, t0, t1);
+  if (!(t0 <= t1)) return true;
+  if (TRI.obbValid == 0) return false;
+  precise double slackO = OBLONG_TRAV_OBB_ROUND * (maxO + 1.0);
+  for (int k = 0; k < 3; ++k) {
+    dvec3 ax = TRI.obbAxis[k];
+    double o = dotD(ax, g_O), d = dotD(ax, g_D);
+    precise double l = TRI.obbLo[k] - slackO, h = TRI.obbHi[k] + slackO;
+    if (d == 0.0) {
+      if (o < l || o > h) t0 = kInfD;
+      continue;
+    }
+    precise double a = (l - o) / d, b = (h - o) / d;
+    if (a > b) {
+      double x = a;
+      a = b;
+      b = x;
+    }
+    t0 = t0 < a ? a : t0;  // std::max
+    t1 = b < t1 ? b : t1;  // std::min
+  }
+  return !(t0 <= t1);
 }
 
 // RayPatch's constructor: per ray and triangle constants.
@@ -1116,9 +1161,9 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
   double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
   bool pre = maxO <= TRI.budget;
   // RayMargins::make(P, maxAbsVertex(T), maxO): this ray's own pads.
-  precise double rayErr = 1e-6 * (TRI.maxP + maxO + abs(TRI.a) + abs(TRI.b));
+  precise double rayErr = OBLONG_TRAV_RAY_ERR * (TRI.maxP + maxO + abs(TRI.a) + abs(TRI.b));
   g_boxPad = TRI.vertexErr + rayErr;
-  g_tAbs = 8.0 * g_boxPad / lengthD(g_D);
+  g_tAbs = double(OBLONG_TRAV_T_ABS_PADS) * g_boxPad / lengthD(g_D);
   if (pre) {  // TraversalMesh::prismBoxes, padded for the budget
     g_boxLo = TRI.boxPadLo;
     g_boxHi = TRI.boxPadHi;
