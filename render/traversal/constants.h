@@ -14,7 +14,7 @@
 // own double value (the SPIR-V holds the double 1e-05, not the float 1e-05f), so both
 // sides compute with the same values.
 //
-// Not here yet: the literals of render/traversal/psi.h (quadraticRoots, rayParamAt),
+// Not here yet: the literals of render/traversal/psi.h (rayParamAt),
 // prism.cpp (Prism::crossings), rect_bounds.h (boxOverRect) and inversion/cubic.h
 // (polyRoots, cubicSolve) are still written on both sides, held only by the parity test
 // (docs/vulkan.md, "The contract").

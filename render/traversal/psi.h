@@ -20,6 +20,7 @@
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/triangle.h"
+#include "render/traversal/patch_math.h"
 
 #include <cmath>
 
@@ -112,44 +113,9 @@ struct Psi {
   }
 };
 
-// Real roots of q2 w² + q1 w + q0 (stable formulas; a slightly negative discriminant
-// counts as a double root). pad[k] bounds the error of root k: an error δ of the
-// polynomial's value (coefficients rounded relative 1e-13) moves a simple root by
-// δ / |q'(w)|, a double root by at most √(δ / |q2|). Returns the count (0..2); a
-// quadratic that vanishes identically returns -1.
-inline int quadraticRoots(double q2, double q1, double q0, double w[2], double pad[2]) {
-  const double scale = std::max({std::abs(q2), std::abs(q1), std::abs(q0)});
-  if (!(scale > 0) || !std::isfinite(scale)) return scale == 0 ? -1 : 0;
-  const double e = 1e-14;
-  int n = 0;
-  if (std::abs(q2) <= e * scale) {  // linear (a huge second root is dropped)
-    if (std::abs(q1) <= e * scale) return std::abs(q0) <= e * scale ? -1 : 0;
-    w[n++] = -q0 / q1;
-  } else {
-    double disc = q1 * q1 - 4 * q2 * q0;
-    const double discErr = 1e-13 * (q1 * q1 + 4 * std::abs(q2 * q0));
-    if (disc < 0) {
-      if (disc < -discErr) return 0;
-      disc = 0;
-    }
-    const double q = -0.5 * (q1 + std::copysign(std::sqrt(disc), q1));
-    if (q != 0) {
-      w[n++] = q / q2;
-      w[n++] = q0 / q;
-    } else {
-      w[n++] = -q1 / (2 * q2);
-    }
-  }
-  for (int k = 0; k < n; ++k) {
-    const double x = w[k];
-    const double delta = 1e-13 * (std::abs(q2) * x * x + std::abs(q1 * x) + std::abs(q0));
-    const double slope = std::abs(2 * q2 * x + q1);
-    double p = slope > 0 ? delta / slope : std::numeric_limits<double>::infinity();
-    if (std::abs(q2) > 0) p = std::min(p, std::sqrt(delta / std::abs(q2)));
-    pad[k] = 4 * p + 1e-14 * std::abs(x);
-  }
-  return n;
-}
+// quadraticRoots(q2, q1, q0, w, pad): real roots of q2 w² + q1 w + q0 with their error
+// bounds, shared with the shaders (patch_math.h).
+using shared::quadraticRoots;
 
 // Points of the conic ψ = 0 on the lines ψ_X = 0 and ψ_Y = 0 (turning-point candidates
 // of the ray's curve; other branches of the conic also show up). Returns the count (≤ 4).

@@ -246,44 +246,8 @@ dvec3 frameN(dvec2 b) {
   return r;
 }
 
-// ---- quadraticRoots (render/traversal/psi.h) -----------------------------------------------------
-int quadraticRoots(double q2, double q1, double q0, out double w[2], out double pad[2]) {
-  w[0] = 0.0;
-  w[1] = 0.0;
-  pad[0] = 0.0;
-  pad[1] = 0.0;
-  double scale = max(max(abs(q2), abs(q1)), abs(q0));
-  if (!(scale > 0.0) || !finiteD(scale)) return scale == 0.0 ? -1 : 0;
-  double e = 1e-14;
-  int n = 0;
-  if (abs(q2) <= e * scale) {
-    if (abs(q1) <= e * scale) return abs(q0) <= e * scale ? -1 : 0;
-    w[n++] = -q0 / q1;
-  } else {
-    precise double disc = q1 * q1 - 4.0 * q2 * q0;
-    precise double discErr = 1e-13 * (q1 * q1 + 4.0 * abs(q2 * q0));
-    if (disc < 0.0) {
-      if (disc < -discErr) return 0;
-      disc = 0.0;
-    }
-    precise double q = -0.5 * (q1 + copysignD(sqrt(disc), q1));
-    if (q != 0.0) {
-      w[n++] = q / q2;
-      w[n++] = q0 / q;
-    } else {
-      w[n++] = -q1 / (2.0 * q2);
-    }
-  }
-  for (int k = 0; k < n; ++k) {
-    precise double x = w[k];
-    precise double delta = 1e-13 * (abs(q2) * x * x + abs(q1 * x) + abs(q0));
-    precise double slope = abs(2.0 * q2 * x + q1);
-    precise double p = slope > 0.0 ? delta / slope : kInfD;
-    if (abs(q2) > 0.0) p = min(p, sqrt(delta / abs(q2)));
-    pad[k] = 4.0 * p + 1e-14 * abs(x);
-  }
-  return n;
-}
+// ---- quadraticRoots: the CPU's own code (render/traversal/patch_math.h) -------------------------
+#include "../../traversal/patch_math.h"
 
 // ---- ψ (render/traversal/psi.h Psi) --------------------------------------------------------------
 double g_c0, g_cX, g_cY, g_cXX, g_cXY, g_cYY;
