@@ -100,9 +100,9 @@ class Traversal final : public TraversalIntersectorBase {
 // The generic path: Traversal<RangeQuery, Inverter, Splitter> (traversal.cpp).
 std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p);
 
-// Opt-in static instantiations. The generic path is the default: measured on this code,
-// instantiations on the concrete strategy types ran 1-3% slower (docs/traversal.md), so
-// none is registered. One that a benchmark shows to be faster is one line in a .cpp
+// Opt-in static instantiations. The generic path is the default: instantiations on the
+// concrete strategy types measured no faster (0.2-0.3% fewer instructions, the same
+// speed within noise; docs/traversal.md, "Generic path"), so none is registered. One that a benchmark shows to be faster is one line in a .cpp
 // linked into the program:
 //     OBLONG_STATIC_TRAVERSAL(Rmip, Newton, Midpoint2D);
 // createIntersector then uses it for exactly that combination (`path()` says which ran).
