@@ -26,6 +26,8 @@ struct StrategyTraits {
   // conformance suites run it on a subset of the rays instead of leaving it out.
   bool slowReference = false;
   std::string summary;  // one line for --help and `oblong info --strategies`
+  // Not exact by design (a baseline such as fixedstep): left out of the exactness tests.
+  bool approximate = false;
 };
 
 template <typename Base, typename Ctx>

@@ -464,10 +464,11 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
   }
   if (top.has("strategies")) {
     const Reader st = top.object("strategies");
-    st.allowOnly({"range", "inverter", "splitter", "marching_scale", "inversion_in_traversal"});
+    st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal"});
     parseStrategy(st, "range", s.range);
     parseStrategy(st, "inverter", s.inverter);
     parseStrategy(st, "splitter", s.splitter);
+    parseStrategy(st, "baseline", s.baseline);
     s.marchingScale = st.number("marching_scale", s.marchingScale);
     if (!(s.marchingScale >= kMinMarchingScale))
       st.errorAt("marching_scale", "must be positive (texels) and >= {} (smaller only multiplies the work), got {}",

@@ -54,6 +54,8 @@ struct Scene {
   StrategyChoice range{"rmip", nlohmann::json::object(), "<default>: strategies.range"};
   StrategyChoice inverter{"newton", nlohmann::json::object(), "<default>: strategies.inverter"};
   StrategyChoice splitter{"midpoint2d", nlohmann::json::object(), "<default>: strategies.splitter"};
+  // A baseline instead of the traversal ("" none; "tessellated", or a registered one).
+  StrategyChoice baseline{"", nlohmann::json::object(), "<default>: strategies.baseline"};
   float marchingScale = 4.0f;        // texels: rectangles at most this size are marched
   bool inversionInTraversal = true;  // invert box intervals to tighten rectangles
   ivec2 imageSize{640, 480};

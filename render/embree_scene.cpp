@@ -270,6 +270,8 @@ TraversalConfig traversalConfigOf(const Scene& scene) {
   c.inverterParams = scene.inverter.params;
   c.splitter = scene.splitter.name;
   c.splitterParams = scene.splitter.params;
+  c.baseline = scene.baseline.name;
+  c.baselineParams = scene.baseline.params;
   c.marchingScale = scene.marchingScale;
   c.inversionInTraversal = scene.inversionInTraversal;
   return c;

@@ -8,6 +8,7 @@
 #include "core/math.h"
 #include "core/memory.h"
 #include "core/params.h"
+#include "core/registry.h"
 #include "core/triangle.h"
 
 #include <algorithm>
@@ -67,11 +68,14 @@ struct TraversalConfig {
   std::string splitter = "midpoint2d"; // Splitter name
   float marchingScale = 4.0f;          // texels: rectangles at most this size are marched
   bool inversionInTraversal = true;    // invert box intervals to tighten rectangles (Fig. 12)
-  // "" (the traversal above) | "bruteforce" (every micro-triangle of the prism's
-  // triangle: the oracle) | "fixedstep" (PDM-style constant-step marching, approximate).
-  // The "tessellated" baseline is not an Intersector: it is EmbreeScene.
+  // "" (the traversal above) or a registered baseline (BaselineRegistry below):
+  // "bruteforce" (every micro-triangle of the prism's triangle: the oracle), "tfdm"
+  // (Thonat et al. 2021's quad-tree traversal), "fixedstep" (PDM-style constant-step
+  // marching, approximate). The "tessellated" baseline is not an Intersector: it is
+  // EmbreeScene.
   std::string baseline;
   float fixedStep = 0.0f;  // world-space step of "fixedstep" (0: one texel's world size)
+  nlohmann::json baselineParams = nlohmann::json::object();  // the baseline's own parameters
   // Strategy parameters by strategy (JSON objects), e.g. rmip: {"resolution": 0.5}.
   nlohmann::json rangeParams = nlohmann::json::object();
   nlohmann::json inverterParams = nlohmann::json::object();
@@ -94,6 +98,18 @@ class Intersector {
   // their resolved parameters, the code path, the traversal options.
   virtual nlohmann::json describe() const { return {{"name", name()}}; }
 };
+
+// Baselines are registered like strategies (core/registry.h), one line in their .cpp:
+//     OBLONG_REGISTER_BASELINE("tfdm", makeTfdm, StrategyTraits{...});
+// StrategyTraits::approximate marks a baseline that is not exact by design (fixedstep):
+// the conformance suites run every other one against the oracle.
+struct BaselineContext {
+  const TraversalConfig& config;
+  std::vector<DisplacedTriangle>* triangles;  // the factory takes them (moves from them)
+  const Displacement& disp;
+};
+using BaselineRegistry = Registry<Intersector, BaselineContext>;
+#define OBLONG_REGISTER_BASELINE(name, ...) OBLONG_REGISTER(::oblong::BaselineRegistry, name, __VA_ARGS__)
 
 // Builds the intersector for one displaced mesh: its triangles (DisplacedTriangle,
 // prepared) and its displacement. Unknown names / unused parameters throw oblong::Error.

@@ -118,8 +118,10 @@ struct StrategyFlags {
     app->add_option("--marching-scale", marchingScale,
                     "rectangles of at most this many texels are marched (>= 1/64; default: the scene's, 4)");
     app->add_option("--inversion-in-traversal", inversionInTraversal, "invert box intervals (true | false)");
-    app->add_option("--baseline", baseline, "tessellated | bruteforce | fixedstep (instead of the traversal)")
-        ->check(CLI::IsMember({"tessellated", "bruteforce", "fixedstep"}));
+    std::string choices;
+    for (const std::string& n : baselineNames()) choices += (choices.empty() ? "" : " | ") + n;
+    app->add_option("--baseline", baseline, choices + " (instead of the traversal)")
+        ->check(CLI::IsMember(baselineNames()));
     app->add_option("--step", step,
                     "world-space step of --baseline fixedstep (default: one texel; at least 1/64 of the smallest "
                     "texel's world size)");
@@ -145,13 +147,21 @@ struct StrategyFlags {
       c.marchingScale = *marchingScale;
     }
     if (inversionInTraversal) c.inversionInTraversal = *inversionInTraversal;
+    // A --baseline other than the scene's drops the scene's parameters for it.
+    if (!baseline.empty() && baseline != c.baseline) {
+      c.baseline = baseline;
+      c.baselineParams = nlohmann::json::object();
+    }
     if (step) {
       if (!(*step > 0) || !std::isfinite(*step)) fail("--step", "must be a finite number > 0, got {}", *step);
-      if (baseline != "fixedstep") fail("--step", "only applies to --baseline fixedstep");
+      if (c.baseline != "fixedstep") fail("--step", "only applies to --baseline fixedstep");
       c.fixedStep = *step;
+      c.baselineParams.erase("step");
     }
-    if (baseline == "tessellated") o.tessellate = true;
-    else c.baseline = baseline;
+    if (c.baseline == "tessellated") {
+      o.tessellate = true;
+      c.baseline.clear();
+    }
     return o;
   }
 };
@@ -165,7 +175,8 @@ nlohmann::json configJson(const AccelOptions& o) {
                       {"marching_scale", c.marchingScale},
                       {"inversion_in_traversal", c.inversionInTraversal}};
   if (!c.baseline.empty()) j["baseline"] = c.baseline;
-  if (c.baseline == "fixedstep") j["step"] = c.fixedStep;
+  if (!c.baselineParams.empty()) j["baseline_params"] = c.baselineParams;
+  if (c.baseline == "fixedstep") j["step"] = c.baselineParams.value("step", c.fixedStep);
   return j;
 }
 
@@ -438,7 +449,10 @@ int runStrategies(bool json) {
       fmt::print("  {:<14} {}{}\n", e.at("name").get<std::string>(), e.at("summary").get<std::string>(),
                  e.at("slow_reference").get<bool>() ? " [slow reference]" : "");
   }
-  fmt::print("baselines: tessellated | bruteforce | fixedstep\n");
+  fmt::print("baselines:\n");
+  for (const auto& e : j.at("baselines"))
+    fmt::print("  {:<14} {}{}\n", e.at("name").get<std::string>(), e.at("summary").get<std::string>(),
+               e.at("approximate").get<bool>() ? " [approximate]" : "");
   return 0;
 }
 

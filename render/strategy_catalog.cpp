@@ -30,6 +30,20 @@ std::string strategyChoices(StrategyKind kind) {
   return s;
 }
 
+std::vector<std::string> baselineNames() {
+  std::vector<std::string> n = BaselineRegistry::instance().names();
+  n.insert(n.begin(), "tessellated");
+  return n;
+}
+
+std::vector<std::string> exactBaselines() {
+  std::vector<std::string> out;
+  const BaselineRegistry& reg = BaselineRegistry::instance();
+  for (const std::string& n : reg.names())
+    if (n != "bruteforce" && !reg.traits(n).approximate) out.push_back(n);
+  return out;
+}
+
 std::vector<StrategyCombination> allCombinations() {
   std::vector<StrategyCombination> out;
   for (const std::string& r : strategyNames(StrategyKind::Range))
@@ -56,7 +70,14 @@ nlohmann::json strategiesJson() {
       j[key].push_back({{"name", n}, {"summary", t.summary}, {"slow_reference", t.slowReference}});
     }
   }
-  j["baselines"] = {"tessellated", "bruteforce", "fixedstep"};
+  j["baselines"] = nlohmann::json::array();
+  j["baselines"].push_back({{"name", "tessellated"},
+                            {"summary", "the micro-triangles built and traced by Embree (the speed limit)"},
+                            {"approximate", false}});
+  const BaselineRegistry& reg = BaselineRegistry::instance();
+  for (const std::string& n : reg.names())
+    j["baselines"].push_back(
+        {{"name", n}, {"summary", reg.traits(n).summary}, {"approximate", reg.traits(n).approximate}});
   const TraversalConfig d;
   j["default"] = {{"range", d.range}, {"inverter", d.inverter}, {"splitter", d.splitter},
                   {"marching_scale", d.marchingScale}, {"inversion_in_traversal", d.inversionInTraversal}};

@@ -22,6 +22,13 @@ const StrategyTraits& strategyTraits(StrategyKind kind, const std::string& name)
 // "rmip | minmax_mipmap | safety_zones": the choices as --help lists them.
 std::string strategyChoices(StrategyKind kind);
 
+// The registered baselines (BaselineRegistry) and "tessellated" (EmbreeScene's
+// pre-tessellation, not an intersector), as --baseline accepts them.
+std::vector<std::string> baselineNames();
+// The registered baselines that claim exactness: every one but the approximate ones and
+// the oracle itself ("bruteforce"), for the conformance suites.
+std::vector<std::string> exactBaselines();
+
 // One registered range query × inverter × splitter combination with default parameters.
 struct StrategyCombination {
   TraversalConfig config;
@@ -30,7 +37,7 @@ struct StrategyCombination {
 std::vector<StrategyCombination> allCombinations();
 
 // {"range": [{"name", "summary", "slow_reference"}...], "inverter": [...], "splitter": [...],
-//  "baselines": [...], "default": {...}}.
+//  "baselines": [{"name", "summary", "approximate"}...], "default": {...}}.
 nlohmann::json strategiesJson();
 
 }  // namespace oblong

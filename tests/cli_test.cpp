@@ -196,6 +196,57 @@ TEST_CASE("oblong trace writes the first hit of every ray, CSV and binary alike"
   CHECK(j.at("memory_total").get<int64_t>() > 0);
 }
 
+TEST_CASE("oblong trace --baseline tfdm matches both oracles; a scene file can choose it", "[cli][trace][tfdm]") {
+  const auto dir = oblong::test::scratchDir("cli_trace_tfdm");
+  const auto rays = someRays(300);
+  const std::string csv = (dir / "rays.csv").string();
+  oblong::writeRays(csv, rays);
+  // The default scene (torus and ground) and a tiled torus whose scene file asks for tfdm.
+  const std::string scene = (dir / "tfdm_scene.json").string();
+  std::ofstream(scene) << R"({"strategies": {"baseline": {"name": "tfdm"}},
+    "meshes": [{"shape": {"type": "torus", "segments": [24, 12]},
+                "displacement": {"map": ")" OBLONG_SOURCE_DIR R"(/scenes/maps/cobbles_256.png",
+                                 "scale": 0.06, "bias": -0.5, "tiling": [3, 2]}}]})";
+  for (const std::string& s : {std::string(), scene}) {
+    INFO("scene " << (s.empty() ? "<default>" : s));
+    const std::string tf = (dir / "tf.csv").string(), bf = (dir / "bf.csv").string(),
+                      ts = (dir / "ts.csv").string(), stats = (dir / "tf.json").string();
+    const std::string flag = s.empty() ? " --baseline tfdm" : "";  // the scene file chooses it itself
+    Run r = run("trace " + s + " --rays " + csv + " -o " + tf + flag + " --stats " + stats);
+    INFO(r.out << r.err);
+    REQUIRE(r.status == 0);
+    REQUIRE(run("trace " + s + " --rays " + csv + " -o " + bf + " --baseline bruteforce").status == 0);
+    REQUIRE(run("trace " + s + " --rays " + csv + " -o " + ts + " --baseline tessellated").status == 0);
+    const auto a = oblong::readHits(tf), b = oblong::readHits(bf), c = oblong::readHits(ts);
+    REQUIRE(a.size() == rays.size());
+    REQUIRE(b.size() == rays.size());
+    REQUIRE(c.size() == rays.size());
+    size_t hits = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+      INFO("ray " << i);
+      REQUIRE(a[i].valid() == b[i].valid());
+      REQUIRE(a[i].valid() == c[i].valid());
+      if (!a[i].valid()) continue;
+      ++hits;
+      CHECK(a[i].mesh == b[i].mesh);
+      CHECK(std::abs(a[i].t - b[i].t) <= 1e-5f * std::max(1.0f, a[i].t));
+      CHECK(std::abs(a[i].t - c[i].t) <= 1e-5f * std::max(1.0f, a[i].t));
+    }
+    CHECK(hits > rays.size() / 4);
+    std::ifstream f(stats);
+    const auto j = nlohmann::json::parse(f);
+    CHECK(j.at("config").at("baseline") == "tfdm");
+    CHECK(j.at("memory").contains("tfdm/mipmap"));
+    const auto& rc = j.at("ray_counters");
+    CHECK(rc.at("steps").get<int64_t>() == rc.at("boxes").get<int64_t>() + rc.at("cells_marched").get<int64_t>());
+    CHECK(rc.at("cells_marched").get<int64_t>() > 0);
+  }
+  // Unknown names list what is registered.
+  Run r = run("trace --rays " + csv + " -o " + (dir / "x.csv").string() + " --baseline tfdmm");
+  CHECK(r.status == 1);
+  CHECK_THAT(r.err, Catch::Contains("tfdm"));
+}
+
 TEST_CASE("oblong trace: bad ray files and flags give one clear error line", "[cli][trace][bad_input]") {
   const auto dir = oblong::test::scratchDir("cli_trace_bad");
   auto write = [&](const std::string& name, const std::string& text) {

@@ -186,10 +186,12 @@ std::vector<ConformanceConfig> conformanceConfigs() {
   };
   variant([](TraversalConfig& c) { c.inversionInTraversal = false; });
   for (float ms : {0.5f, 1.0f, 16.0f, 1e6f}) variant([ms](TraversalConfig& c) { c.marchingScale = ms; });
-  variant([](TraversalConfig& c) {  // the TFDM configuration
+  variant([](TraversalConfig& c) {  // the RMIP driver with TFDM's mipmap and quad-tree splits
     c.range = "minmax_mipmap", c.splitter = "quadtree", c.inversionInTraversal = false, c.marchingScale = 1.0f;
   });
   variant([](TraversalConfig& c) { c.rangeParams = {{"resolution", 8}, {"compression", 0}}; });
+  // Every registered baseline that claims exactness (tfdm, ...), the oracle aside.
+  for (const std::string& b : exactBaselines()) variant([&b](TraversalConfig& c) { c.baseline = b; });
   return out;
 }
 

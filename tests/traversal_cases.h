@@ -60,8 +60,9 @@ std::vector<RayCase> rayFamilies(const Scenario& s, const Intersector& bf, int c
 
 // What both conformance suites run: every registered combination (allCombinations(),
 // so a new strategy is tested the day it registers), then the variants that change the
-// traversal's shape (no inversion in traversal, marching scales, the TFDM
-// configuration, a tiny RMIP). Combinations with a slow reference strategy (ceres) run
+// traversal's shape (no inversion in traversal, marching scales, the RMIP driver with
+// TFDM's mipmap and quad-tree splits, a tiny RMIP), then every registered exact baseline
+// (exactBaselines(): tfdm, ...). Combinations with a slow reference strategy (ceres) run
 // on every kSlowStride-th ray only.
 struct ConformanceConfig {
   TraversalConfig config;

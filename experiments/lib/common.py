@@ -46,9 +46,15 @@ SCENES = ROOT / "scenes"
 
 # The two configurations every experiment is about (docs/traversal.md).
 CANONICAL = []  # the defaults: rmip (full resolution) + newton + midpoint2d, marching 4, inversion on
-TFDM = ["--range", "minmax_mipmap", "--splitter", "quadtree", "--inversion-in-traversal", "false",
-        "--marching-scale", "1"]
-RANGE_PREFIXES = ("rmip/", "minmax_mipmap/", "safety_zones/")
+# TFDM (Thonat et al. 2021) as it traverses: the `tfdm` baseline (docs/tfdm.md).
+TFDM = ["--baseline", "tfdm"]
+# The RMIP driver with TFDM's min-max mipmap and node-aligned quad-tree splits, no
+# inversion, marching one texel: an ablation of RMIP (prism clip, curve rectangles,
+# front-to-back order, early exit), not TFDM.
+DRIVER_MIPMAP = ["--range", "minmax_mipmap", "--splitter", "quadtree", "--inversion-in-traversal", "false",
+                 "--marching-scale", "1"]
+DRIVER_MIPMAP_LABEL = "RMIP driver + mipmap/quad-tree"
+RANGE_PREFIXES = ("rmip/", "minmax_mipmap/", "safety_zones/", "tfdm/mipmap", "tfdm/upper_levels")
 
 # RMIP resolutions of the paper's Table 1 columns, as divisors of the map's longer side
 # (strategies.range.resolution = max(W, H) / divisor; divisor 1 = full resolution, the

@@ -1,6 +1,6 @@
-// The two baselines that share the traversal's micro-geometry: "bruteforce", the oracle
+// Two baselines that share the traversal's micro-geometry: "bruteforce", the oracle
 // (every micro-triangle, no pruning), and "fixedstep", PDM-style constant-step marching
-// (Hoetzlein 2025, §4.2; approximate). See docs/traversal.md.
+// (Hoetzlein 2025, §4.2; approximate). See docs/traversal.md; "tfdm" is in tfdm.cpp.
 #include "render/traversal/traversal.h"
 
 #include "core/error.h"
@@ -165,19 +165,23 @@ class FixedStep final : public Intersector {
   std::unique_ptr<Inverter> inv_;
 };
 
-}  // namespace
-
-std::unique_ptr<Intersector> makeBruteForce(std::vector<DisplacedTriangle> triangles, const Displacement& disp) {
+std::unique_ptr<Intersector> makeBruteForce(ParamSet&, const BaselineContext& ctx) {
   TraversalMesh mesh;
-  mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });
+  const Displacement& disp = ctx.disp;
+  mesh.build(std::move(*ctx.triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });
   warnSkippedTriangles(mesh, "bruteforce");
   return std::make_unique<BruteForce>(std::move(mesh));
 }
 
-std::unique_ptr<Intersector> makeFixedStep(std::vector<DisplacedTriangle> triangles, const Displacement& disp,
-                                           float step, std::unique_ptr<Inverter> inv) {
+std::unique_ptr<Intersector> makeFixedStep(ParamSet& params, const BaselineContext& ctx) {
+  const TraversalConfig& cfg = ctx.config;
+  const Displacement& disp = ctx.disp;
+  const float step = params.get<float>("step", cfg.fixedStep);
+  if (!(step >= 0) || !std::isfinite(step)) fail("traversal", "fixed step must be >= 0 (0: one texel), got {}", step);
+  ParamSet ips(cfg.inverterParams, "strategies.inverter");
+  auto inv = createInverter(cfg.inverter, ips);
   TraversalMesh mesh;
-  mesh.build(std::move(triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });
+  mesh.build(std::move(*ctx.triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });
   warnSkippedTriangles(mesh, "fixedstep");
   if (step > 0) {  // bounded work: no step far below the smallest texel
     double texel = std::numeric_limits<double>::infinity();
@@ -192,5 +196,14 @@ std::unique_ptr<Intersector> makeFixedStep(std::vector<DisplacedTriangle> triang
   }
   return std::make_unique<FixedStep>(std::move(mesh), step, std::move(inv));
 }
+
+}  // namespace
+
+OBLONG_REGISTER_BASELINE("bruteforce", makeBruteForce,
+                         StrategyTraits{.summary = "every micro-triangle of the triangle, no pruning: the oracle"});
+OBLONG_REGISTER_BASELINE("fixedstep", makeFixedStep,
+                         StrategyTraits{.summary = "PDM-style constant-step marching with secant refinement "
+                                                   "(Hoetzlein 2025, Sec. 4.2; approximate)",
+                                        .approximate = true});
 
 }  // namespace oblong

@@ -1,5 +1,5 @@
 // createIntersector: the traversal for any registered strategy combination (the generic
-// path, or an opt-in static instantiation), or one of the baselines (baselines.cpp).
+// path, or an opt-in static instantiation), or a registered baseline (BaselineRegistry).
 // See render/traversal/traversal.h and docs/traversal.md.
 #include "render/traversal/traversal.h"
 
@@ -28,17 +28,14 @@ void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what) {
 std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::vector<DisplacedTriangle> triangles,
                                                const Displacement& disp) {
   if (!disp.map) throw Error("traversal: a displaced mesh needs a displacement map");
-  if (cfg.baseline == "bruteforce") return makeBruteForce(std::move(triangles), disp);
-  if (cfg.baseline == "fixedstep") {
-    if (!(cfg.fixedStep >= 0) || !std::isfinite(cfg.fixedStep))
-      fail("traversal", "fixed step must be >= 0 (0: one texel), got {}", cfg.fixedStep);
-    ParamSet ips(cfg.inverterParams, "strategies.inverter");
-    auto inv = createInverter(cfg.inverter, ips);
-    return makeFixedStep(std::move(triangles), disp, cfg.fixedStep, std::move(inv));
+  if (!cfg.baseline.empty()) {
+    const BaselineRegistry& reg = BaselineRegistry::instance();
+    if (!reg.has(cfg.baseline))
+      fail("traversal", "unknown baseline '{}' (known: {}; the tessellated baseline is not an intersector)",
+           cfg.baseline, reg.list());
+    ParamSet bps(cfg.baselineParams, "strategies.baseline");
+    return reg.create(cfg.baseline, bps, BaselineContext{cfg, &triangles, disp});
   }
-  if (!cfg.baseline.empty())
-    fail("traversal", "unknown baseline '{}' (known: bruteforce, fixedstep; the tessellated baseline is not an "
-                      "intersector)", cfg.baseline);
   if (!(cfg.marchingScale >= kMinMarchingScale) || !std::isfinite(cfg.marchingScale))
     fail("traversal", "marching scale must be a finite number of texels >= {} (smaller only multiplies the work), got {}",
          kMinMarchingScale, cfg.marchingScale);

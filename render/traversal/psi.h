@@ -177,4 +177,14 @@ inline int monotoneSplits(const LocalFrame& F, const Psi& psi, const dvec3& O, c
   return u;
 }
 
+// Approximate direction of a ray's texture-space curve in local sample coordinates
+// (ordering only: front-to-back order in the traversal, child order in tfdm): the ray
+// direction solved in the frame (PX, PY, N) at T's centroid.
+inline dvec2 approxDirLocal(const LocalFrame& F, const dvec3& dir) {
+  const dvec3 N = F.N(dvec2(1.0 / 3.0));
+  const double det = glm::dot(F.PX, glm::cross(F.PY, N));
+  if (!(std::abs(det) > 0)) return dvec2(1.0);
+  return {glm::dot(dir, glm::cross(F.PY, N)) / det, glm::dot(F.PX, glm::cross(dir, N)) / det};
+}
+
 }  // namespace oblong

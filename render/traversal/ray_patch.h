@@ -299,13 +299,7 @@ class RayPatch final : public SplitContext {
     return true;
   }
 
-  // Approximate direction of the curve in local sample coordinates (ordering only).
-  dvec2 dirLocal() const {
-    const dvec3 N = frame_.N(dvec2(1.0 / 3.0));
-    const double det = glm::dot(frame_.PX, glm::cross(frame_.PY, N));
-    if (!(std::abs(det) > 0)) return dvec2(1.0);
-    return {glm::dot(dir_, glm::cross(frame_.PY, N)) / det, glm::dot(frame_.PX, glm::cross(dir_, N)) / det};
-  }
+  dvec2 dirLocal() const { return approxDirLocal(frame_, dir_); }
 
   // Local cells touching [lo, hi], clipped to T's cells. False when empty.
   bool snap(const dvec2& lo, const dvec2& hi, ivec2& clo, ivec2& chi) const {

@@ -6,8 +6,9 @@
 // (OBLONG_STATIC_TRAVERSAL below) and is kept only where a benchmark shows it faster.
 // Per ray and triangle the work is RayPatch's (render/traversal/ray_patch.h, where the
 // algorithm is described); the per-triangle constants are TraversalMesh's
-// (traversal_mesh.h); createIntersector and describe() are in create.cpp, the
-// bruteforce and fixedstep baselines in baselines.cpp.
+// (traversal_mesh.h); createIntersector and describe() are in create.cpp; the
+// baselines (bruteforce, fixedstep in baselines.cpp, tfdm in tfdm.cpp) register
+// themselves in BaselineRegistry (render/intersector.h).
 #pragma once
 
 #include "core/registry.h"
@@ -129,10 +130,5 @@ struct StaticTraversalRegistration {
   static const ::oblong::StaticTraversalRegistration OBLONG_REGISTRY_CAT(oblongStaticTraversal_, __LINE__) { \
     ::oblong::staticTraversal<RQ, Inv, Split>()                                                         \
   }
-
-// The baselines sharing the micro-geometry (traversal.cpp).
-std::unique_ptr<Intersector> makeBruteForce(std::vector<DisplacedTriangle> triangles, const Displacement& disp);
-std::unique_ptr<Intersector> makeFixedStep(std::vector<DisplacedTriangle> triangles, const Displacement& disp,
-                                           float step, std::unique_ptr<Inverter> inv);
 
 }  // namespace oblong

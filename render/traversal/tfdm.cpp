@@ -1,0 +1,356 @@
+// The "tfdm" baseline: Tessellation-Free Displacement Mapping (Thonat et al. 2021) as it
+// traverses, the RMIP paper's main competitor (RMIP paper §3, §6; DESIGN §2). Per ray and
+// displaced triangle:
+//   - a texture-space quad-tree over a min-max mipmap, descended from the coarsest nodes
+//     covering T's cells (at most 2×2 roots: the level at which T's cell range spans at
+//     most two nodes per axis);
+//   - per node, a conservative world box of the micro-geometry over node ∩ T's uv box
+//     from the node's [min, max] (oblong's interval bounds, rect_bounds.h: TFDM's affine
+//     arithmetic, made conservative for normalised normals), and a ray/box test against
+//     [tmin, closest hit so far];
+//   - nodes whose square misses T's uv triangle are skipped without a box test;
+//   - children in a fixed order from the signs of the ray's texture-space direction;
+//   - leaves at single cells of the micro-geometry, tested with the same watertight
+//     micro-triangles as every other intersector; the closest hit is kept and the
+//     traversal goes on (no termination at the first hit: pruning only by it).
+// There is no prism clip, no ψ-curve, no inversion and no texel marching.
+// Steps as the RMIP paper's Fig. 9 counts them: every node whose box is tested
+// (`boxes`) plus every leaf cell tested (`cells_marched`). docs/tfdm.md gives the
+// sources of each choice.
+#include "render/traversal/traversal.h"
+
+#include "core/error.h"
+#include "core/stats.h"
+#include "render/traversal/closest_hit.h"
+#include "render/traversal/rect_bounds.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace oblong {
+
+OBLONG_STAT_COUNTER("tfdm/Prisms", tfPrisms);
+OBLONG_STAT_COUNTER("tfdm/Hits", tfHits);
+OBLONG_STAT_COUNTER("tfdm/Nodes", tfNodes);
+OBLONG_STAT_COUNTER("tfdm/NodesOutsideTriangle", tfOutside);
+OBLONG_STAT_COUNTER("tfdm/Leaves", tfLeaves);
+OBLONG_STAT_COUNTER("tfdm/MicroTriangles", tfMicroTris);
+
+namespace {
+
+int64_t floorDiv(int64_t a, int L) { return a >> L; }  // arithmetic shift: floor (C++20)
+int64_t wrap64(int64_t i, int64_t n) {
+  const int64_t r = i % n;
+  return r < 0 ? r + n : r;
+}
+
+// The min-max mipmap over the micro-geometry's cells. Level 0 holds, per cell (i, j),
+// the [min, max] of its four corner samples (i..i+1, j..j+1, wrapped): every
+// micro-vertex of the cell, clipped or not, lies between them (DESIGN invariant 2).
+// Level L+1 is the union of 2×2 nodes of level L. Levels are periodic (the map wraps,
+// tiling is free) while 2^L divides both sides; a node above the last stored level is
+// the union of the stored nodes it covers, or, when that is more than kMaxFold nodes
+// (maps whose sides are not powers of two), the `minmax_mipmap` range query's bound over
+// the node's samples (built only then).
+class CellPyramid {
+ public:
+  static constexpr int64_t kMaxFold = 64;
+
+  CellPyramid(const Displacement& d, int topLevel) : map_(*d.map) {
+    const int W = map_.width(), H = map_.height();
+    int ls = 0;
+    while (ls < topLevel && W % (2 << ls) == 0 && H % (2 << ls) == 0) ++ls;
+    size_t bytes = 0;
+    for (int L = 0; L <= ls; ++L) bytes += size_t(W >> L) * size_t(H >> L) * sizeof(Interval);
+    checkFits(map_.name(), "tfdm's min-max mipmap", bytes,
+              "use a smaller map, or the canonical traversal (its rmip can be built at a lower resolution)",
+              fmt::format("levels 0..{} over {}x{} cells", ls, W, H));
+    levels_.resize(ls + 1);
+    dims_.resize(ls + 1);
+    dims_[0] = {W, H};
+    levels_[0].resize(size_t(W) * H);
+    tbb::parallel_for(0, H, [&](int j) {
+      Interval* row = &levels_[0][size_t(j) * W];
+      for (int i = 0; i < W; ++i) {
+        const float a = map_.at(i, j), b = map_.at(i + 1, j), c = map_.at(i, j + 1), e = map_.at(i + 1, j + 1);
+        row[i] = {std::min({a, b, c, e}), std::max({a, b, c, e})};
+      }
+    });
+    for (int L = 1; L <= ls; ++L) {
+      const int w = dims_[L - 1].x / 2, h = dims_[L - 1].y / 2, pw = dims_[L - 1].x;
+      dims_[L] = {w, h};
+      levels_[L].resize(size_t(w) * h);
+      const Interval* p = levels_[L - 1].data();
+      Interval* q = levels_[L].data();
+      tbb::parallel_for(0, h, [&](int j) {
+        for (int i = 0; i < w; ++i) {
+          const Interval& a = p[size_t(2 * j) * pw + 2 * i];
+          const Interval& b = p[size_t(2 * j) * pw + 2 * i + 1];
+          const Interval& c = p[size_t(2 * j + 1) * pw + 2 * i];
+          const Interval& e = p[size_t(2 * j + 1) * pw + 2 * i + 1];
+          q[size_t(j) * w + i] = {std::min({a.lo, b.lo, c.lo, e.lo}), std::max({a.hi, b.hi, c.hi, e.hi})};
+        }
+      });
+    }
+  }
+
+  int storedTop() const { return int(levels_.size()) - 1; }
+  // True when a node of level L is answered by folding stored nodes.
+  bool folds(int L) const {
+    const int s = storedTop();
+    if (L <= s) return true;
+    const int64_t n = int64_t(1) << std::min(L - s, 40);
+    return std::min<int64_t>(n, dims_[s].x) * std::min<int64_t>(n, dims_[s].y) <= kMaxFold;
+  }
+  void setUpper(std::unique_ptr<RangeQuery> q) { upper_ = std::move(q); }
+  const RangeQuery* upper() const { return upper_.get(); }
+
+  // Raw [min, max] over cells [x·2^L, (x+1)·2^L) × [y·2^L, (y+1)·2^L) (absolute cell
+  // indices, unwrapped).
+  Interval node(int L, int64_t x, int64_t y) const {
+    const int s = storedTop();
+    if (L <= s) {
+      const ivec2 d = dims_[L];
+      return levels_[L][size_t(wrap64(y, d.y)) * d.x + size_t(wrap64(x, d.x))];
+    }
+    if (folds(L)) {
+      const int k = L - s;
+      const ivec2 d = dims_[s];
+      const int64_t nx = std::min<int64_t>(int64_t(1) << k, d.x), ny = std::min<int64_t>(int64_t(1) << k, d.y);
+      Interval r;
+      for (int64_t j = 0; j < ny; ++j)
+        for (int64_t i = 0; i < nx; ++i) {
+          const Interval& v = levels_[s][size_t(wrap64((y << k) + j, d.y)) * d.x + size_t(wrap64((x << k) + i, d.x))];
+          r.lo = std::min(r.lo, v.lo), r.hi = std::max(r.hi, v.hi);
+        }
+      return r;
+    }
+    // Samples x·2^L .. (x+1)·2^L inclusive (the cells' far corners); clamped to int, a
+    // range wider than the map is the whole map's anyway.
+    auto clampI = [](int64_t v) { return int(std::clamp<int64_t>(v, -(int64_t(1) << 30), int64_t(1) << 30)); };
+    const int64_t W = map_.width(), H = map_.height();
+    const int64_t x0 = x << L, y0 = y << L;
+    const int64_t x1 = std::min((x + 1) << L, x0 + W), y1 = std::min((y + 1) << L, y0 + H);
+    return upper_->rawRange(SampleRange{clampI(x0), clampI(y0), clampI(x1), clampI(y1)});
+  }
+  size_t bytes() const {
+    size_t b = 0;
+    for (const auto& l : levels_) b += l.capacity() * sizeof(Interval);
+    return b;
+  }
+
+ private:
+  const HeightMap& map_;
+  std::vector<std::vector<Interval>> levels_;
+  std::vector<ivec2> dims_;
+  std::unique_ptr<RangeQuery> upper_;
+};
+
+// The roots of a triangle: the level at which its cell range spans at most two nodes
+// per axis, and those nodes.
+struct Roots {
+  int level = 0;
+  int64_t x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+  static Roots of(const CellRange& c) {
+    Roots r;
+    while (floorDiv(c.x1, r.level) - floorDiv(c.x0, r.level) > 1 || floorDiv(c.y1, r.level) - floorDiv(c.y0, r.level) > 1)
+      ++r.level;
+    r.x0 = floorDiv(c.x0, r.level), r.x1 = floorDiv(c.x1, r.level);
+    r.y0 = floorDiv(c.y0, r.level), r.y1 = floorDiv(c.y1, r.level);
+    return r;
+  }
+};
+
+class Tfdm final : public Intersector {
+ public:
+  Tfdm(TraversalMesh mesh, std::vector<Roots> roots, std::unique_ptr<CellPyramid> pyr, int maxRootLevel)
+      : mesh_(std::move(mesh)), roots_(std::move(roots)), pyr_(std::move(pyr)), maxRootLevel_(maxRootLevel) {}
+  std::string name() const override { return "tfdm"; }
+  size_t size() const override { return mesh_.tris.size(); }
+  // Embree's bounds: the AABB of T's bounding prism (heights from the root nodes).
+  AABB bounds(uint32_t prim) const override { return mesh_.bounds(prim); }
+  MemoryReport memory() const override {
+    MemoryReport r{{"tfdm/mipmap", pyr_->bytes()}};
+    if (pyr_->upper())
+      for (MemoryItem m : pyr_->upper()->memory()) r.push_back({"tfdm/upper_levels (" + m.name + ")", m.bytes});
+    r.push_back({"tfdm/triangles", mesh_.bytes() + roots_.capacity() * sizeof(Roots)});
+    return r;
+  }
+  nlohmann::json describe() const override {
+    return {{"name", "tfdm"},
+            {"stored_levels", pyr_->storedTop() + 1},
+            {"max_root_level", maxRootLevel_},
+            {"upper_levels", pyr_->upper() ? std::string(pyr_->upper()->name()) : std::string("folded")},
+            {"bounds", "prism AABB"}};
+  }
+
+  bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
+    const PrismParams& P = mesh_.params[prim];
+    if (!P.valid) return false;
+    const DisplacedTriangle& T = mesh_.tris[prim];
+    const LocalFrame& F = mesh_.frames[prim];
+    const CellRange& cr = mesh_.cells[prim];
+    const Displacement& d = mesh_.disp;
+    ++c.prisms;
+    OBLONG_STAT_INC(tfPrisms);
+
+    const dvec3 O(r.o), D(r.d), invD = 1.0 / D;
+    const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
+    const RayMargins m = RayMargins::make(P, maxAbsVertex(T), maxO);
+    const double tSlackAbs = OBLONG_TRAV_T_ABS_PADS * m.boxPad / glm::length(D);
+    auto slack = [&](double t) { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tSlackAbs; };
+    const dvec2 uvLo = d.toSample(T.uvBox.lo) - dvec2(F.origin), uvHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
+    const double mMin = double(T.minNormalLength);
+    // T's uv triangle in sample coordinates, with the inside sign of each edge.
+    dvec2 S[3];
+    for (int k = 0; k < 3; ++k) S[k] = d.toSample(T.t[k]);
+    const double orientT = (S[1].x - S[0].x) * (S[2].y - S[0].y) - (S[1].y - S[0].y) * (S[2].x - S[0].x);
+    const double sigma = orientT > 0 ? 1.0 : -1.0;
+    // Child order: the child nearest the ray's start first, by the signs of its
+    // texture-space direction.
+    const dvec2 dl = approxDirLocal(F, D);
+    const int ax = dl.x < 0 ? 1 : 0, ay = dl.y < 0 ? 1 : 0;
+    const int order[4][2] = {{ax, ay}, {ax, 1 - ay}, {1 - ax, ay}, {1 - ax, 1 - ay}};
+
+    struct Node {
+      int64_t x, y;
+      int level;
+    };
+    constexpr int kStack = 4 * 64;
+    Node stack[kStack];
+    int sp = 0;
+    const Roots& R = roots_[prim];
+    // Roots pushed so that the first in the fixed order is popped first.
+    for (int k = 3; k >= 0; --k) {
+      const int64_t x = order[k][0] ? R.x1 : R.x0, y = order[k][1] ? R.y1 : R.y0;
+      if (k > 0) {  // roots repeat when the triangle spans one node on an axis
+        bool dup = false;
+        for (int q = 0; q < k; ++q)
+          dup |= (order[q][0] ? R.x1 : R.x0) == x && (order[q][1] ? R.y1 : R.y0) == y;
+        if (dup) continue;
+      }
+      stack[sp++] = {x, y, R.level};
+    }
+
+    ClosestHit best;
+    const WatertightRay wr(r);
+    bool cellsReady = false;
+    alignas(MicroCells) unsigned char mcRaw[sizeof(MicroCells)];
+    RayCounters local;
+    while (sp > 0) {
+      const Node n = stack[--sp];
+      // The node's cells within T's cell range.
+      const int64_t cx0 = std::max<int64_t>(n.x << n.level, cr.x0), cx1 = std::min<int64_t>(((n.x + 1) << n.level) - 1, cr.x1);
+      const int64_t cy0 = std::max<int64_t>(n.y << n.level, cr.y0), cy1 = std::min<int64_t>(((n.y + 1) << n.level) - 1, cr.y1);
+      if (cx0 > cx1 || cy0 > cy1) continue;
+      if (outsideTriangle(S, sigma, double(cx0), double(cy0), double(cx1 + 1), double(cy1 + 1))) {
+        OBLONG_STAT_INC(tfOutside);
+        continue;
+      }
+      ++local.boxes;
+      ++local.rangeQueries;
+      const Interval h = d.toHeight(pyr_->node(n.level, n.x, n.y));
+      const dvec2 lo = glm::max(dvec2(double(cx0 - F.origin.x), double(cy0 - F.origin.y)), uvLo);
+      const dvec2 hi = glm::min(dvec2(double(cx1 + 1 - F.origin.x), double(cy1 + 1 - F.origin.y)), uvHi);
+      const BoxD box = boxOverRect(F, mMin, lo, hi, h.lo, h.hi, m.boxPad);
+      double t0 = r.tmin - slack(r.tmin);
+      double t1 = best.found ? double(best.t) + slack(best.t) : double(r.tmax) + slack(r.tmax);
+      box.clip(O, invD, t0, t1);
+      if (!(t0 <= t1)) continue;
+      if (n.level == 0) {
+        ++local.cellsMarched;
+        if (!cellsReady) {
+          new (mcRaw) MicroCells(T, d);
+          cellsReady = true;
+        }
+        MicroTriangle buf[MicroCells::kMaxPerCell];
+        const int k = reinterpret_cast<const MicroCells*>(mcRaw)->cell(int(n.x), int(n.y), buf);
+        local.microTriangles += k;
+        for (int q = 0; q < k; ++q) best.test(wr, buf[q], r.tmin, r.tmax);
+        continue;
+      }
+      if (sp + 4 > kStack) fail("tfdm", "traversal stack overflow at level {}", n.level);  // cannot happen: depth ≤ 62
+      for (int k = 3; k >= 0; --k)
+        stack[sp++] = {2 * n.x + order[k][0], 2 * n.y + order[k][1], n.level - 1};
+    }
+    c += local;
+    OBLONG_STAT_ADD(tfNodes, local.boxes);
+    OBLONG_STAT_ADD(tfLeaves, local.cellsMarched);
+    OBLONG_STAT_ADD(tfMicroTris, local.microTriangles);
+    if (!best.found) return false;
+    OBLONG_STAT_INC(tfHits);
+    best.fill(hit);
+    return true;
+  }
+
+ private:
+  // True when the square [x0, x1] × [y0, y1] (sample coordinates) lies strictly outside
+  // one edge of T's uv triangle, by more than rounding: its cells' micro-triangles are
+  // then empty (a square touching T only along a line gives degenerate pieces, which no
+  // ray hits).
+  static bool outsideTriangle(const dvec2 S[3], double sigma, double x0, double y0, double x1, double y1) {
+    const double mag = 1 + std::max({std::abs(x0), std::abs(x1), std::abs(y0), std::abs(y1)});
+    for (int e = 0; e < 3; ++e) {
+      const dvec2 a = S[e], b = S[(e + 1) % 3], ab = b - a;
+      const double tol = 1e-9 * (std::abs(ab.x) + std::abs(ab.y)) * mag;
+      bool allOut = true;
+      for (const dvec2 p : {dvec2(x0, y0), dvec2(x1, y0), dvec2(x0, y1), dvec2(x1, y1)})
+        if (sigma * (ab.x * (p.y - a.y) - ab.y * (p.x - a.x)) >= -tol) {
+          allOut = false;
+          break;
+        }
+      if (allOut) return true;
+    }
+    return false;
+  }
+
+  TraversalMesh mesh_;
+  std::vector<Roots> roots_;
+  std::unique_ptr<CellPyramid> pyr_;
+  int maxRootLevel_;
+};
+
+std::unique_ptr<Intersector> makeTfdm(ParamSet&, const BaselineContext& ctx) {
+  const Displacement& disp = ctx.disp;
+  std::vector<DisplacedTriangle>& tris = *ctx.triangles;
+  std::vector<Roots> roots(tris.size());
+  std::vector<Rect> boxes;
+  int top = 0;
+  for (size_t i = 0; i < tris.size(); ++i) {
+    if (tris[i].uvArea2 == 0.0f) continue;
+    roots[i] = Roots::of(cellsOverlapping(tris[i], disp));
+    top = std::max(top, roots[i].level);
+    boxes.push_back(tris[i].uvBox);
+  }
+  auto pyr = std::make_unique<CellPyramid>(disp, top);
+  if (!pyr->folds(top)) {
+    ParamSet none(nlohmann::json::object(), "tfdm: upper levels");
+    pyr->setUpper(createRangeQuery("minmax_mipmap", none, RangeQueryContext{disp, QueryNeeds::forRects(disp, boxes)}));
+  }
+  // T's heights for its prism: the union of its root nodes (what TFDM bounds T with).
+  TraversalMesh mesh;
+  mesh.build(std::move(tris), disp, [&](const DisplacedTriangle& T) {
+    const Roots& r = roots[size_t(&T - mesh.tris.data())];
+    Interval h;
+    for (int64_t y = r.y0; y <= r.y1; ++y)
+      for (int64_t x = r.x0; x <= r.x1; ++x) {
+        const Interval v = pyr->node(r.level, x, y);
+        h.lo = std::min(h.lo, v.lo), h.hi = std::max(h.hi, v.hi);
+      }
+    return disp.toHeight(h);
+  });
+  warnSkippedTriangles(mesh, "tfdm");
+  return std::make_unique<Tfdm>(std::move(mesh), std::move(roots), std::move(pyr), top);
+}
+
+}  // namespace
+
+OBLONG_REGISTER_BASELINE("tfdm", makeTfdm,
+                         StrategyTraits{.summary = "Thonat et al. 2021: texture-space quad-tree over a min-max mipmap, "
+                                                   "node boxes, fixed child order, no early exit (exact)"});
+
+}  // namespace oblong
