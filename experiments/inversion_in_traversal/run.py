@@ -21,11 +21,11 @@ HYPOTHESIS = ("RMIP paper §6, Fig. 12: on the CPU, inverting each box's ray int
 
 
 def run(ctx):
-    scenes = ctx.pick(["asteroid", "quad_tiled", "sphere", "terrain"], ["asteroid"])
+    scenes = ctx.pick(["paper/terracotta_roof", "paper/diving_helmet", "paper/desert_tire"], ["paper/terracotta_roof"])
     levels = ctx.pick(["low", "normal", "high"], ["normal", "high"])
     integ = "path"
-    size = ctx.pick("240x180", "32x24")
-    reps = ctx.reps(5, 1)
+    size = ctx.pick("200x150", "16x12")
+    reps = ctx.reps(3, 1)
     jobs, resmap = [], {}
     for s in scenes:
         doc = C.load_scene(C.scene_path(s))

@@ -61,7 +61,52 @@ RANGE_PREFIXES = ("rmip/", "minmax_mipmap/", "safety_zones/", "tfdm/mipmap", "tf
 # canonical default). Chosen so that "normal" has about the minmax mipmap's memory
 # (the paper's "RMIP" column: x1.3-1.6 of TFDM), "low" a tenth of it or less and "high"
 # the full-resolution structure (the paper's x7.6-30).
-RMIP_LEVELS = {"low": 16, "normal": 4, "high": 1}
+RMIP_LEVELS = {"low": 16, "normal": 2, "high": 1}
+
+# The paper-scale suite (scenes/paper/, scenes/README.md): Table 1's regimes.
+PAPER_SCENES = ["paper/alien_sphere", "paper/terracotta_roof", "paper/diving_helmet", "paper/desert_tire",
+                "paper/creature"]
+
+
+def short(scene: str) -> str:
+    """'paper/alien_sphere' -> 'alien_sphere' (labels, file names)."""
+    return scene.split("/")[-1]
+
+
+def geomean(xs) -> float:
+    import math
+    xs = [x for x in xs if x == x and x > 0]
+    return math.exp(sum(math.log(x) for x in xs) / len(xs)) if xs else float("nan")
+
+
+_TESS: dict = {}
+
+
+def tessellation_fit(ctx, scene) -> dict:
+    """Whether the pre-tessellation of `scene` fits this machine, without building it:
+    oblong's own estimate (printed when it refuses: OBLONG_MEMORY_LIMIT=1 forces the
+    refusal) against 80% of MemAvailable, the share oblong allows one structure.
+    {"fits", "micro_triangles", "needs" (text), "needs_bytes"}."""
+    key = (str(ctx.binary), str(scene))
+    if key in _TESS:
+        return _TESS[key]
+    env = dict(os.environ, OBLONG_MEMORY_LIMIT="1M")
+    p = subprocess.run([str(ctx.binary), "render", str(scene), "--baseline", "tessellated", "--size", "2x2", "-q",
+                        "-o", str(ctx.tmp("probe.png"))], capture_output=True, text=True, env=env, timeout=300)
+    m = re.search(r"needs ([0-9.]+ [KMGT]?i?B) \((\d+) micro-triangles", p.stderr)
+    if not m:
+        raise ExperimentError(f"{scene}: no pre-tessellation estimate in: {p.stderr.strip()[-500:]}")
+    needs = m.group(1)
+    num, unit = needs.split()
+    mult = {"B": 1, "KiB": 1 << 10, "MiB": 1 << 20, "GiB": 1 << 30, "TiB": 1 << 40}[unit]
+    nbytes = int(float(num) * mult)
+    avail = 0
+    for line in open("/proc/meminfo"):
+        if line.startswith("MemAvailable:"):
+            avail = int(line.split()[1]) * 1024
+    r = {"fits": nbytes <= 0.8 * avail, "micro_triangles": int(m.group(2)), "needs": needs, "needs_bytes": nbytes}
+    _TESS[key] = r
+    return r
 
 
 class ExperimentError(RuntimeError):

@@ -23,11 +23,11 @@ CURVES = {"rmip_low": "RMIP low", "rmip_normal": "RMIP normal", "rmip_high": "RM
 
 
 def run(ctx):
-    scenes = ctx.pick(["asteroid", "quad_tiled"], ["asteroid"])
+    scenes = ctx.pick(["paper/terracotta_roof", "paper/diving_helmet"], ["paper/terracotta_roof"])
     scales = ctx.pick([1, 2, 4, 8, 16, 32], [1, 4, 16])
     curves = ctx.pick(list(CURVES), ["rmip_normal", "minmax"])
-    size = ctx.pick("400x300", "48x36")
-    reps = ctx.reps(5, 1)
+    size = ctx.pick("320x240", "32x24")
+    reps = ctx.reps(3, 1)
     jobs, desc = [], {}
     for s in scenes:
         doc = C.load_scene(C.scene_path(s))

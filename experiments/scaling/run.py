@@ -22,13 +22,13 @@ HYPOTHESIS = ("RMIP paper §6, Fig. 11: the speed-up over TFDM (equal memory) gr
 def run(ctx):
     # (series name, base scene, parameter, values, what the base scene has)
     series = ctx.pick(
-        [("sphere: displacement scale", "sphere", "scale", [0.5, 1, 2, 4, 8]),
-         ("sphere: tiling", "sphere", "tiling", [1, 2, 4, 8, 16]),
-         ("quad_tiled: tiling", "quad_tiled", "tiling", [2, 4, 8, 16, 32])],
-        [("sphere: displacement scale", "sphere", "scale", [1, 4]),
-         ("sphere: tiling", "sphere", "tiling", [1, 4])])
+        [("alien_sphere: displacement scale", "paper/alien_sphere", "scale", [0.5, 1, 2, 4, 8]),
+         ("alien_sphere: tiling", "paper/alien_sphere", "tiling", [2, 8, 25, 50, 100]),
+         ("terracotta_roof: tiling", "paper/terracotta_roof", "tiling", [1, 2, 8, 25, 100])],
+        [("terracotta_roof: displacement scale", "paper/terracotta_roof", "scale", [1, 4]),
+         ("terracotta_roof: tiling", "paper/terracotta_roof", "tiling", [2, 25])])
     integ = "path"
-    size = ctx.pick("320x240", "32x24")
+    size = ctx.pick("200x150", "16x12")
     reps = ctx.reps(3, 1)
     jobs, info = [], {}
     for name, base, param, values in series:

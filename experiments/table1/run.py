@@ -18,37 +18,43 @@ HYPOTHESIS = ("RMIP paper §6, Table 1: at about TFDM's memory (the 'RMIP' colum
               "RMIP reaches TFDM's speed or better with a small fraction of its memory; pre-tessellation is "
               "fastest but needs 10–235× the memory.")
 
-CONFIGS = ["tfdm", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
-LABELS = {"tfdm": "TFDM (1×)", "tessellated": "pre-tessellation", "rmip_low": "RMIP low",
-          "rmip_normal": "RMIP normal", "rmip_high": "RMIP high"}
+CONFIGS = ["tfdm", "driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
+LABELS = {"tfdm": "TFDM (1×)", "driver_mipmap": C.DRIVER_MIPMAP_LABEL, "tessellated": "pre-tessellation",
+          "rmip_low": "RMIP low", "rmip_normal": "RMIP normal", "rmip_high": "RMIP high"}
 
 
 def run(ctx):
-    scenes = ctx.pick(["asteroid", "quad_tiled", "sphere", "terrain"], ["asteroid", "terrain"])
-    sizes = {"primary": ctx.pick("480x360", "48x36"), "path": ctx.pick("240x180", "32x24")}
+    scenes = ctx.pick(C.PAPER_SCENES, ["paper/terracotta_roof"])
+    sizes = {"primary": ctx.pick("320x240", "32x24"), "path": ctx.pick("160x120", "16x12")}
     reps = ctx.reps(3, 1)
     jobs = []
-    meta = {}
+    meta, tess = {}, {}
     for s in scenes:
         doc = C.load_scene(C.scene_path(s))
         w, h = C.map_size(doc)
+        tess[s] = C.tessellation_fit(ctx, C.scene_path(s))
         for cfg in CONFIGS:
             if cfg.startswith("rmip_"):
                 level = cfg[5:]
                 res = C.rmip_resolution(doc, level)
-                scene = ctx.scene_variant(s, f"{s}_rmip{res}", strategies={"range": {"name": "rmip",
-                                                                                     "resolution": res}})
+                scene = ctx.scene_variant(s, f"{C.short(s)}_rmip{res}",
+                                          strategies={"range": {"name": "rmip", "resolution": res}})
                 args = list(C.CANONICAL)
                 meta[(s, cfg)] = f"resolution {res} (map {w}×{h} / {C.RMIP_LEVELS[level]})"
             else:
+                # Pre-tessellating a paper-scale map takes 20-30 s per run: not in quick mode.
+                if cfg == "tessellated" and (ctx.quick or not tess[s]["fits"]):
+                    continue
                 scene = C.scene_path(s)
-                args = list(C.TFDM) if cfg == "tfdm" else ["--baseline", "tessellated"]
+                args = {"tfdm": C.TFDM, "driver_mipmap": C.DRIVER_MIPMAP,
+                        "tessellated": ["--baseline", "tessellated"]}[cfg]
+                args = list(args)
                 meta[(s, cfg)] = ""
             for integ, size in sizes.items():
                 jobs.append(((s, cfg, integ), "render", scene, args + ["--integrator", integ, "--size", size]))
     ctx.log(f"{len(jobs)} configurations x {reps} rounds")
-    res = C.interleaved(ctx, [(f"{k[0]}/{k[1]}/{k[2]}", sub, sc, a) for k, sub, sc, a in jobs], reps)
-    runs = {tuple(k.split("/")): v for k, v in res.items()}
+    res = C.interleaved(ctx, [("|".join(k), sub, sc, a) for k, sub, sc, a in jobs], reps)
+    runs = {tuple(k.split("|")): v for k, v in res.items()}
 
     rows = []
     for s in scenes:
@@ -56,6 +62,14 @@ def run(ctx):
             base = runs[(s, "tfdm", integ)]
             b0 = base[0].stats
             for cfg in CONFIGS:
+                if (s, cfg, integ) not in runs:
+                    t = tess[s]
+                    why = ("not run (quick mode)" if t["fits"] else
+                           f"does not fit: {t['micro_triangles']} micro-triangles, {t['needs']}")
+                    rows.append({"scene": C.short(s), "integrator": integ, "size": sizes[integ], "config": cfg,
+                                 "geometry": why,
+                                 "range_bytes": t["needs_bytes"], "fits": False})
+                    continue
                 rs = runs[(s, cfg, integ)]
                 st = rs[0].stats
                 sp = C.paired_ratios(base, rs)
@@ -63,7 +77,7 @@ def run(ctx):
                 secs = [r.seconds for r in rs]
                 rays = st["rays"]["primary"] + st["rays"]["secondary"]
                 rows.append({
-                    "scene": s, "integrator": integ, "size": sizes[integ], "config": cfg,
+                    "scene": C.short(s), "integrator": integ, "size": sizes[integ], "config": cfg, "fits": True,
                     "geometry": st["geometry"], "rmip": meta[(s, cfg)],
                     "render_s_median": C.med(secs), "render_s_min": min(secs), "render_s_max": max(secs),
                     "speedup_vs_tfdm_median": C.med(sp), "speedup_min": lo, "speedup_max": hi,
@@ -73,42 +87,51 @@ def run(ctx):
                     "build_s_median": C.med([r.build_seconds for r in rs]),
                     "rays": rays, "mrays_per_s_median": rays / C.med(secs) * 1e-6,
                     "steps_per_ray": st["ray_counters"]["steps_per_ray"],
+                    "steps_ratio_tfdm_over_this": (b0["ray_counters"]["steps_per_ray"]
+                                                   / max(1e-9, st["ray_counters"]["steps_per_ray"])),
                     "process_cpu_s_median": C.med([r.cpu for r in rs]),
                     "rounds": len(rs),
                 })
     C.write_csv(ctx.out / "results.csv", rows)
+    names = [C.short(s) for s in scenes]
 
     # Plot: speed-up over TFDM per scene (camera rays, path tracing) and memory ratio.
     plt = C.plt()
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
-    cols = ["tessellated", "rmip_low", "rmip_normal", "rmip_high"]
-    colors = {"tessellated": "0.6", "rmip_low": "tab:green", "rmip_normal": "tab:orange", "rmip_high": "tab:red"}
-    wbar = 0.2
+    cols = ["driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
+    colors = {"driver_mipmap": "tab:blue", "tessellated": "0.6", "rmip_low": "tab:green",
+              "rmip_normal": "tab:orange", "rmip_high": "tab:red"}
+    wbar = 0.16
+
+    def row(sc, integ, cfg):
+        return next(r for r in rows if r["scene"] == sc and r["integrator"] == integ and r["config"] == cfg)
     for ax, integ in zip(axes[:2], sizes):
         for i, cfg in enumerate(cols):
             xs, ys, lo, hi = [], [], [], []
-            for j, s in enumerate(scenes):
-                r = next(r for r in rows if r["scene"] == s and r["integrator"] == integ and r["config"] == cfg)
-                xs.append(j + (i - 1.5) * wbar)
+            for j, sc in enumerate(names):
+                r = row(sc, integ, cfg)
+                if not r["fits"]:
+                    continue
+                xs.append(j + (i - 2) * wbar)
                 ys.append(r["speedup_vs_tfdm_median"])
                 lo.append(r["speedup_vs_tfdm_median"] - r["speedup_min"])
                 hi.append(r["speedup_max"] - r["speedup_vs_tfdm_median"])
             ax.bar(xs, ys, wbar, yerr=[lo, hi], color=colors[cfg], label=LABELS[cfg], capsize=2)
         ax.axhline(1, color="k", lw=0.8)
         ax.set_yscale("log")
-        ax.set_xticks(range(len(scenes)), scenes)
+        ax.set_xticks(range(len(names)), names, rotation=20, fontsize=7)
         ax.set_ylabel("speed-up over TFDM (median, range)")
         ax.set_title(f"{integ} ({sizes[integ]}, 1 spp, 1 thread)")
         ax.grid(True, axis="y", which="both", alpha=0.3)
     ax = axes[2]
     for i, cfg in enumerate(cols):
-        xs = [j + (i - 1.5) * wbar for j in range(len(scenes))]
-        ys = [next(r for r in rows if r["scene"] == s and r["integrator"] == "primary" and r["config"] == cfg)[
-            "mem_ratio_vs_tfdm"] for s in scenes]
-        ax.bar(xs, ys, wbar, color=colors[cfg], label=LABELS[cfg])
+        pts = [(j + (i - 2) * wbar, row(sc, "primary", cfg)) for j, sc in enumerate(names)]
+        pts = [(x, r) for x, r in pts if r["fits"]]
+        ax.bar([x for x, _ in pts], [r["mem_ratio_vs_tfdm"] for _, r in pts], wbar, color=colors[cfg],
+               label=LABELS[cfg])
     ax.axhline(1, color="k", lw=0.8)
     ax.set_yscale("log")
-    ax.set_xticks(range(len(scenes)), scenes)
+    ax.set_xticks(range(len(names)), names, rotation=20, fontsize=7)
     ax.set_ylabel("data-structure memory / TFDM's mipmap")
     ax.set_title("memory (lower is better)")
     ax.grid(True, axis="y", which="both", alpha=0.3)
@@ -117,43 +140,62 @@ def run(ctx):
     fig.savefig(ctx.out / "table1.png")
 
     # Markdown: the paper's layout, one row per scene and integrator.
-    header = ["scene", "rays", "TFDM mem", "TFDM time"] + [f"{LABELS[c]} mem / speed-up" for c in cols]
+    header = (["scene", "rays", "TFDM mem", "TFDM time", "TFDM steps/ray"]
+              + [f"{LABELS[c]} mem / speed-up" for c in cols] + ["canonical (RMIP high) steps/ray"])
     trows = []
-    for s in scenes:
+    for sc in names:
         for integ in sizes:
-            g = {r["config"]: r for r in rows if r["scene"] == s and r["integrator"] == integ}
+            g = {r["config"]: r for r in rows if r["scene"] == sc and r["integrator"] == integ}
             t = g["tfdm"]
-            cells = [s, integ, C.fmt_bytes(t["range_bytes"]), f"{t['render_s_median']:.3f} s"]
+            cells = [sc, integ, C.fmt_bytes(t["range_bytes"]), f"{t['render_s_median']:.3f} s",
+                     f"{t['steps_per_ray']:.1f}"]
             for c in cols:
                 r = g[c]
+                if not r["fits"]:
+                    cells.append(r["geometry"])
+                    continue
                 cells.append(f"{C.fmt_ratio(r['mem_ratio_vs_tfdm'], digits=3 if r['mem_ratio_vs_tfdm'] < 0.1 else 2)}"
                              f" / {C.fmt_ratio(r['speedup_vs_tfdm_median'], r['speedup_min'], r['speedup_max'])}")
+            cells.append(f"{g['rmip_high']['steps_per_ray']:.1f} (TFDM ×{g['rmip_high']['steps_ratio_tfdm_over_this']:.1f})")
             trows.append(cells)
     table = C.md_table(header, trows)
-    res_rows = [[s] + [meta[(s, c)] for c in ("rmip_low", "rmip_normal", "rmip_high")] for s in scenes]
-    restable = C.md_table(["scene", "RMIP low", "RMIP normal", "RMIP high"], res_rows)
+    res_rows = [[C.short(s)] + [meta[(s, c)] for c in ("rmip_low", "rmip_normal", "rmip_high")]
+                + [f"{tess[s]['micro_triangles']} micro-triangles, {tess[s]['needs']}"
+                   + ("" if tess[s]["fits"] else " (does not fit)")] for s in scenes]
+    restable = C.md_table(["scene", "RMIP low", "RMIP normal", "RMIP high", "pre-tessellation"], res_rows)
 
-    def mean_sd(cfg, integ):
-        xs = [r["speedup_vs_tfdm_median"] for r in rows if r["config"] == cfg and r["integrator"] == integ]
+    def stats(cfg, integ):
+        xs = [r["speedup_vs_tfdm_median"] for r in rows if r["config"] == cfg and r["integrator"] == integ
+              and r["fits"]]
+        if not xs:
+            return float("nan"), float("nan"), float("nan")
         m = sum(xs) / len(xs)
         sd = (sum((x - m) ** 2 for x in xs) / max(1, len(xs) - 1)) ** 0.5
-        return m, sd
+        return m, sd, C.geomean(xs)
 
-    m_path, sd_path = mean_sd("rmip_normal", "path")
-    m_prim, sd_prim = mean_sd("rmip_normal", "primary")
-    m_low, _ = mean_sd("rmip_low", "path")
-    m_high, _ = mean_sd("rmip_high", "path")
+    num = {}
+    for cfg in cols:
+        for integ in sizes:
+            m, sd, g = stats(cfg, integ)
+            num[f"mean_speedup_{cfg}_{integ}"] = m
+            num[f"sd_speedup_{cfg}_{integ}"] = sd
+            num[f"geomean_speedup_{cfg}_{integ}"] = g
+    num["geomean_steps_ratio_high"] = C.geomean([r["steps_ratio_tfdm_over_this"] for r in rows
+                                                 if r["config"] == "rmip_high" and r["integrator"] == "primary"])
     memn = [r["mem_ratio_vs_tfdm"] for r in rows if r["config"] == "rmip_normal" and r["integrator"] == "path"]
     meml = [r["mem_ratio_vs_tfdm"] for r in rows if r["config"] == "rmip_low" and r["integrator"] == "path"]
-    verdict = (f"RMIP normal (memory ×{min(memn):.2f}–{max(memn):.2f} of TFDM's mipmap): mean speed-up over TFDM "
-               f"×{m_path:.2f} (sd {sd_path:.2f}) path-traced, ×{m_prim:.2f} (sd {sd_prim:.2f}) camera rays, "
-               f"against the paper's ×5 (sd 3) on GPU; RMIP low (memory ×{min(meml):.3f}–{max(meml):.3f}) "
-               f"×{m_low:.2f}, RMIP high ×{m_high:.2f} (path).")
+    verdict = (f"RMIP normal (memory ×{min(memn):.2f}–{max(memn):.2f} of TFDM's mipmap): speed-up over TFDM "
+               f"mean ×{num['mean_speedup_rmip_normal_path']:.2f} (sd {num['sd_speedup_rmip_normal_path']:.2f}, "
+               f"geomean ×{num['geomean_speedup_rmip_normal_path']:.2f}) path-traced, mean "
+               f"×{num['mean_speedup_rmip_normal_primary']:.2f} (geomean "
+               f"×{num['geomean_speedup_rmip_normal_primary']:.2f}) camera rays, against the paper's ×5 (sd 3) on "
+               f"GPU; RMIP low (memory ×{min(meml):.3f}–{max(meml):.3f}) ×{num['geomean_speedup_rmip_low_path']:.2f},"
+               f" RMIP high ×{num['geomean_speedup_rmip_high_path']:.2f} (geomeans, path); "
+               f"{C.DRIVER_MIPMAP_LABEL} ×{num['geomean_speedup_driver_mipmap_path']:.2f} (path) / "
+               f"×{num['geomean_speedup_driver_mipmap_primary']:.2f} (camera); TFDM takes "
+               f"×{num['geomean_steps_ratio_high']:.1f} the steps per camera ray of RMIP high (geomean).")
     return {"status": "ok", "verdict": verdict, "tables": [table, restable], "plots": ["table1.png"],
-            "csv": ["results.csv"],
-            "numbers": {"mean_speedup_normal_path": m_path, "sd_speedup_normal_path": sd_path,
-                        "mean_speedup_normal_primary": m_prim, "mean_speedup_low_path": m_low,
-                        "mean_speedup_high_path": m_high}}
+            "csv": ["results.csv"], "numbers": num}
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 // Traversal targets (issue 4): primary rays on a scene, single thread, for the
-// canonical configuration (rmip + newton + midpoint2d), the TFDM configuration
-// (minmax_mipmap + quadtree, no inversion, marching scale 1) and the pre-tessellated Embree scene, side by
-// side in one run. Counters: Mrays/s (per core), steps per ray (boxes + marched cells,
+// canonical configuration (rmip + newton + midpoint2d), TFDM (the `tfdm` baseline,
+// docs/tfdm.md), the RMIP driver with TFDM's mipmap and quad-tree splits (minmax_mipmap +
+// quadtree, no inversion, marching scale 1: an ablation) and the pre-tessellated Embree
+// scene, side by side in one run. Counters: Mrays/s (per core), steps per ray (boxes + marched cells,
 // as the RMIP paper counts them), acceleration-structure memory (MB).
 //
 //   ./build/bench_traversal [--scene scenes/asteroid.json] [--size 256x192]
@@ -63,11 +64,14 @@ std::vector<Config> configs() {
     c.push_back({"canonical_res" + std::to_string(res), o});
   }
   AccelOptions tfdm;
-  tfdm.traversal.range = "minmax_mipmap";
-  tfdm.traversal.splitter = "quadtree";
-  tfdm.traversal.inversionInTraversal = false;
-  tfdm.traversal.marchingScale = 1.0f;  // TFDM descends to single texels
+  tfdm.traversal.baseline = "tfdm";
   c.push_back({"tfdm", tfdm});
+  AccelOptions driver;
+  driver.traversal.range = "minmax_mipmap";
+  driver.traversal.splitter = "quadtree";
+  driver.traversal.inversionInTraversal = false;
+  driver.traversal.marchingScale = 1.0f;
+  c.push_back({"driver_mipmap", driver});
   AccelOptions tess;
   tess.tessellate = true;
   c.push_back({"tessellated", tess});

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Ratios from one bench_traversal run (Google Benchmark JSON with repetitions):
-canonical vs TFDM vs pre-tessellation, medians of the repetitions, as a Markdown table.
+canonical vs TFDM (`tfdm`) vs the RMIP driver with mipmap/quad-tree vs pre-tessellation, medians of the repetitions, as a Markdown table.
 
     /usr/bin/python3 experiments/traversal/summarize.py out.json
 """
