@@ -4,7 +4,8 @@
 // separates its rectangle: the largest 2^k such that a multiple of 2^k (absolute sample
 // index) lies strictly inside the rectangle's longer side; the curve's crossing with
 // that line comes from ψ in closed form — no inversion. With minmax_mipmap, inversion
-// during traversal off, and marching scale 1 this is the TFDM baseline configuration.
+// during traversal off, and marching scale 1 this is the RMIP driver with TFDM's nodes: an
+// ablation, not TFDM (which is the `tfdm` baseline, render/traversal/tfdm.cpp).
 //
 // Node alignment is in absolute sample indices; for map sizes that are not powers of two
 // the wrapped nodes of minmax_mipmap start again at every period, so the alignment is

@@ -1,6 +1,7 @@
 #include "core/microgeometry.h"
 #include "core/procedural.h"
 #include "render/embree_scene.h"
+#include "render/strategy_catalog.h"
 
 #include <catch2/catch.hpp>
 
@@ -76,7 +77,8 @@ TEST_CASE("cells wholly inside T are two flat triangles on the grid", "[microgeo
   CHECK(gridOnly >= 2 * (14 * 13) / 2);
 }
 
-// Through the pre-tessellation and through the traversal (canonical and TFDM set-ups).
+// Through the pre-tessellation, the traversal (canonical, and the driver with TFDM's
+// mipmap and quad-tree splits) and every exact baseline (tfdm, ...).
 TEST_CASE("a closed displaced torus leaks no ray shot from inside", "[microgeometry][watertight][traversal]") {
   Scene s;
   SceneMesh torus;
@@ -84,12 +86,18 @@ TEST_CASE("a closed displaced torus leaks no ray shot from inside", "[microgeome
   auto map = std::make_shared<const HeightMap>(proceduralHeightMap(61, 47, 9));  // odd sizes
   torus.displacement = Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)};
   s.meshes.push_back(std::move(torus));
-  AccelOptions tessellated{.tessellate = true, .traversal = {}}, canonical, tfdm;
-  tfdm.traversal.range = "minmax_mipmap";
-  tfdm.traversal.splitter = "quadtree";
-  tfdm.traversal.inversionInTraversal = false;
-  tfdm.traversal.marchingScale = 1.0f;
-  for (const AccelOptions& opts : {tessellated, canonical, tfdm}) {
+  AccelOptions tessellated{.tessellate = true, .traversal = {}}, canonical, driver;
+  driver.traversal.range = "minmax_mipmap";
+  driver.traversal.splitter = "quadtree";
+  driver.traversal.inversionInTraversal = false;
+  driver.traversal.marchingScale = 1.0f;
+  std::vector<AccelOptions> all{tessellated, canonical, driver};
+  for (const std::string& b : exactBaselines()) {
+    AccelOptions o;
+    o.traversal.baseline = b;
+    all.push_back(o);
+  }
+  for (const AccelOptions& opts : all) {
     EmbreeScene accel(s, opts);
     INFO(accel.geometryName());
     if (opts.tessellate) REQUIRE(accel.microTriangles() > 10000);

@@ -158,10 +158,15 @@ TEST_CASE("float traversal loses no hit of a double-precision run", "[traversal]
     INFO(s.name);
     std::vector<std::unique_ptr<Intersector>> configs;
     configs.push_back(createIntersector(config("rmip", "newton", "midpoint2d"), s.tris, s.disp));
-    TraversalConfig tfdm = config("minmax_mipmap", "newton", "quadtree");
-    tfdm.inversionInTraversal = false;
-    tfdm.marchingScale = 1.0f;
-    configs.push_back(createIntersector(tfdm, s.tris, s.disp));
+    TraversalConfig driver = config("minmax_mipmap", "newton", "quadtree");
+    driver.inversionInTraversal = false;
+    driver.marchingScale = 1.0f;
+    configs.push_back(createIntersector(driver, s.tris, s.disp));
+    for (const std::string& b : exactBaselines()) {
+      TraversalConfig c;
+      c.baseline = b;
+      configs.push_back(createIntersector(c, s.tris, s.disp));
+    }
     // The double micro-triangles of interior cells, and the AABB check.
     struct Tri {
       dvec3 a, b, c;
