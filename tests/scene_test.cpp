@@ -421,15 +421,24 @@ TEST_CASE("every scene shipped in scenes/ loads with its meshes and maps", "[sce
       {"sphere.json", {{3968}, {{512, 256}}}},
       {"terrain.json", {{2 * 40 * 34}, {{403, 344}}}},
       {"mixed.json", {{480, 48000, 2}, {{1024, 1024}, {0, 0}, {0, 0}}}},
+      // The paper-scale suite (scenes/README.md, "Paper-scale suite").
+      {"paper/alien_sphere.json", {{2 * 32 * 15}, {{2048, 2048}}}},
+      {"paper/terracotta_roof.json", {{128}, {{2048, 2048}}}},
+      {"paper/diving_helmet.json", {{2 * 48 * 27}, {{4096, 4096}}}},
+      {"paper/desert_tire.json", {{2 * 96 * 48}, {{4096, 4096}}}},
+      {"paper/creature.json", {{2 * 256 * 100}, {{4096, 4096}}}},
   };
   std::set<std::string> seen;
-  for (const auto& entry : fs::directory_iterator(fs::path(OBLONG_SOURCE_DIR) / "scenes")) {
+  const fs::path root = fs::path(OBLONG_SOURCE_DIR) / "scenes";
+  for (const auto& entry : fs::recursive_directory_iterator(root)) {
     if (entry.path().extension() != ".json") continue;
-    const std::string name = entry.path().filename().string();
+    const std::string name = fs::relative(entry.path(), root).generic_string();
     INFO(name);
     seen.insert(name);
-    if (name == "terrain.json" && !fs::exists(fs::path(OBLONG_SOURCE_DIR) / "scenes/data/jacksboro_fault_dem.png"))
+    if (name == "terrain.json" && !fs::exists(root / "data/jacksboro_fault_dem.png"))
       FAIL("scenes/data/jacksboro_fault_dem.png is missing: run scripts/setup.sh (it converts the DEM)");
+    if (name.rfind("paper/", 0) == 0 && !fs::exists(root / "data/paper"))
+      FAIL("scenes/data/paper/ is missing: run scripts/setup.sh (it generates the paper-scale maps)");
     Scene s;
     REQUIRE_NOTHROW(s = loadScene(entry.path().string()));
     CHECK(!s.lights.empty());

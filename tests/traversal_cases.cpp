@@ -192,11 +192,14 @@ std::vector<ConformanceConfig> conformanceConfigs() {
   variant([](TraversalConfig& c) { c.rangeParams = {{"resolution", 8}, {"compression", 0}}; });
   // Every registered baseline that claims exactness (tfdm, ...), the oracle aside.
   for (const std::string& b : exactBaselines()) variant([&b](TraversalConfig& c) { c.baseline = b; });
+  variant([](TraversalConfig& c) {  // tfdm with world-space node boxes (its default: texture frame)
+    c.baseline = "tfdm", c.baselineParams = {{"boxes", "world"}};
+  });
   return out;
 }
 
 std::string describe(const TraversalConfig& c) {
-  if (!c.baseline.empty()) return c.baseline;
+  if (!c.baseline.empty()) return c.baseline + (c.baselineParams.empty() ? "" : " " + c.baselineParams.dump());
   return fmt::format("{}+{}+{} (march {}, inversion {}{}{})", c.range, c.inverter, c.splitter, c.marchingScale,
                      c.inversionInTraversal ? "on" : "off", c.rangeParams.empty() ? "" : ", range ",
                      c.rangeParams.empty() ? "" : c.rangeParams.dump());

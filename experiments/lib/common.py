@@ -54,6 +54,10 @@ TFDM = ["--baseline", "tfdm"]
 DRIVER_MIPMAP = ["--range", "minmax_mipmap", "--splitter", "quadtree", "--inversion-in-traversal", "false",
                  "--marching-scale", "1"]
 DRIVER_MIPMAP_LABEL = "RMIP driver + mipmap/quad-tree"
+# `tfdm` with world-space node boxes (the canonical traversal's box construction) instead
+# of its default texture-frame boxes: separates the box frame from the traversal order.
+TFDM_WORLD_STRATEGIES = {"baseline": {"name": "tfdm", "boxes": "world"}}
+TFDM_WORLD_LABEL = "TFDM, world boxes"
 RANGE_PREFIXES = ("rmip/", "minmax_mipmap/", "safety_zones/", "tfdm/mipmap", "tfdm/upper_levels")
 
 # RMIP resolutions of the paper's Table 1 columns, as divisors of the map's longer side

@@ -110,17 +110,18 @@ def run(ctx):
     fig.tight_layout()
     fig.savefig(ctx.out / "marching_scale.png")
 
-    header = ["scene", "curve", "memory vs mipmap"] + [f"scale {k}" for k in scales] + ["best scale"]
+    header = (["scene", "curve", "memory vs TFDM"] + [f"scale {k}" for k in scales]
+              + ["best scale", "steps/camera ray at best"])
     trows = []
     for s in scenes:
         for cv in curves:
             pts = {r["marching_scale"]: r for r in rows if r["scene"] == s and r["curve"] == cv}
             trows.append([s, CURVES[cv], f"×{pts[scales[0]]['mem_vs_minmax_mipmap']:.2g}"] +
                          [f"{pts[k]['relative_time_median']:.2f}" for k in scales] +
-                         [str(best[(s, cv)]["marching_scale"])])
+                         [str(best[(s, cv)]["marching_scale"]), f"{best[(s, cv)]['steps_per_ray']:.1f}"])
         t = next(r for r in rows if r["scene"] == s and r["curve"] == "tfdm")
-        trows.append([s, "TFDM (scale 1)", "×1"] + [f"{t['relative_time_median']:.2f}"] + [""] * (len(scales) - 1)
-                     + ["–"])
+        trows.append([s, "TFDM (`tfdm`, no marching)", "×1"] + [f"{t['relative_time_median']:.2f}"]
+                     + [""] * (len(scales) - 1) + ["–", f"{t['steps_per_ray']:.1f}"])
     parts = []
     for s in scenes:
         bs = ", ".join(f"{CURVES[cv]} {best[(s, cv)]['marching_scale']}" for cv in curves)

@@ -40,13 +40,16 @@ def run(ctx):
     size = ctx.pick("320x240", "64x48")
     configs = {"tfdm": ("TFDM", None, C.TFDM), "canonical": ("canonical (RMIP full res.)", None, C.CANONICAL),
                "rmip_normal": ("canonical, RMIP normal", "normal", C.CANONICAL),
-               "driver_mipmap": (C.DRIVER_MIPMAP_LABEL, None, C.DRIVER_MIPMAP)}
+               "driver_mipmap": (C.DRIVER_MIPMAP_LABEL, None, C.DRIVER_MIPMAP),
+               "tfdm_world": (C.TFDM_WORLD_LABEL, "tfdm_world", [])}
     rows, maps = [], {}
     for sp, s in zip(paths, scenes):
         doc = C.load_scene(C.scene_path(sp))
         for key, (label, level, flags) in configs.items():
             scene = C.scene_path(sp)
-            if level:
+            if level == "tfdm_world":
+                scene = ctx.scene_variant(sp, f"{s}_tfdm_world", strategies=C.TFDM_WORLD_STRATEGIES)
+            elif level:
                 res = C.rmip_resolution(doc, level)
                 scene = ctx.scene_variant(sp, f"{s}_rmip{res}", strategies={"range": {"name": "rmip",
                                                                                       "resolution": res}})
@@ -110,7 +113,8 @@ def run(ctx):
         ax.bar(xs, [x["cells_per_camera_ray"] for x in sel], bottom=[x["boxes_per_camera_ray"] for x in sel],
                color="tab:orange", label="cells marched")
         ax.set_xticks(list(xs), [x["config"].replace("canonical", "canon.").replace("rmip_normal", "RMIP norm.")
-                                 .replace("driver_mipmap", "driver+mm") for x in sel], fontsize=7)
+                                 .replace("driver_mipmap", "driver+mm").replace("tfdm_world", "tfdm world")
+                                 for x in sel], fontsize=6)
         ax.yaxis.tick_right()
         ax.yaxis.set_label_position("right")
         ax.set_ylabel("mean steps per camera ray")

@@ -18,14 +18,15 @@ HYPOTHESIS = ("RMIP paper §6, Table 1: at about TFDM's memory (the 'RMIP' colum
               "RMIP reaches TFDM's speed or better with a small fraction of its memory; pre-tessellation is "
               "fastest but needs 10–235× the memory.")
 
-CONFIGS = ["tfdm", "driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
-LABELS = {"tfdm": "TFDM (1×)", "driver_mipmap": C.DRIVER_MIPMAP_LABEL, "tessellated": "pre-tessellation",
+CONFIGS = ["tfdm", "tfdm_world", "driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
+LABELS = {"tfdm": "TFDM (1×)", "tfdm_world": C.TFDM_WORLD_LABEL, "driver_mipmap": C.DRIVER_MIPMAP_LABEL,
+          "tessellated": "pre-tessellation",
           "rmip_low": "RMIP low", "rmip_normal": "RMIP normal", "rmip_high": "RMIP high"}
 
 
 def run(ctx):
     scenes = ctx.pick(C.PAPER_SCENES, ["paper/terracotta_roof"])
-    sizes = {"primary": ctx.pick("320x240", "32x24"), "path": ctx.pick("160x120", "16x12")}
+    sizes = {"primary": ctx.pick("256x192", "32x24"), "path": ctx.pick("128x96", "16x12")}
     reps = ctx.reps(3, 1)
     jobs = []
     meta, tess = {}, {}
@@ -41,6 +42,10 @@ def run(ctx):
                                           strategies={"range": {"name": "rmip", "resolution": res}})
                 args = list(C.CANONICAL)
                 meta[(s, cfg)] = f"resolution {res} (map {w}×{h} / {C.RMIP_LEVELS[level]})"
+            elif cfg == "tfdm_world":
+                scene = ctx.scene_variant(s, f"{C.short(s)}_tfdm_world", strategies=C.TFDM_WORLD_STRATEGIES)
+                args = []
+                meta[(s, cfg)] = ""
             else:
                 # Pre-tessellating a paper-scale map takes 20-30 s per run: not in quick mode.
                 if cfg == "tessellated" and (ctx.quick or not tess[s]["fits"]):
@@ -98,10 +103,10 @@ def run(ctx):
     # Plot: speed-up over TFDM per scene (camera rays, path tracing) and memory ratio.
     plt = C.plt()
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
-    cols = ["driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
-    colors = {"driver_mipmap": "tab:blue", "tessellated": "0.6", "rmip_low": "tab:green",
+    cols = ["tfdm_world", "driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
+    colors = {"tfdm_world": "tab:purple", "driver_mipmap": "tab:blue", "tessellated": "0.6", "rmip_low": "tab:green",
               "rmip_normal": "tab:orange", "rmip_high": "tab:red"}
-    wbar = 0.16
+    wbar = 0.13
 
     def row(sc, integ, cfg):
         return next(r for r in rows if r["scene"] == sc and r["integrator"] == integ and r["config"] == cfg)
@@ -112,7 +117,7 @@ def run(ctx):
                 r = row(sc, integ, cfg)
                 if not r["fits"]:
                     continue
-                xs.append(j + (i - 2) * wbar)
+                xs.append(j + (i - 2.5) * wbar)
                 ys.append(r["speedup_vs_tfdm_median"])
                 lo.append(r["speedup_vs_tfdm_median"] - r["speedup_min"])
                 hi.append(r["speedup_max"] - r["speedup_vs_tfdm_median"])
@@ -125,7 +130,7 @@ def run(ctx):
         ax.grid(True, axis="y", which="both", alpha=0.3)
     ax = axes[2]
     for i, cfg in enumerate(cols):
-        pts = [(j + (i - 2) * wbar, row(sc, "primary", cfg)) for j, sc in enumerate(names)]
+        pts = [(j + (i - 2.5) * wbar, row(sc, "primary", cfg)) for j, sc in enumerate(names)]
         pts = [(x, r) for x, r in pts if r["fits"]]
         ax.bar([x for x, _ in pts], [r["mem_ratio_vs_tfdm"] for _, r in pts], wbar, color=colors[cfg],
                label=LABELS[cfg])
@@ -191,6 +196,8 @@ def run(ctx):
                f"×{num['geomean_speedup_rmip_normal_primary']:.2f}) camera rays, against the paper's ×5 (sd 3) on "
                f"GPU; RMIP low (memory ×{min(meml):.3f}–{max(meml):.3f}) ×{num['geomean_speedup_rmip_low_path']:.2f},"
                f" RMIP high ×{num['geomean_speedup_rmip_high_path']:.2f} (geomeans, path); "
+               f"{C.TFDM_WORLD_LABEL} ×{num['geomean_speedup_tfdm_world_path']:.2f} (path) / "
+               f"×{num['geomean_speedup_tfdm_world_primary']:.2f} (camera); "
                f"{C.DRIVER_MIPMAP_LABEL} ×{num['geomean_speedup_driver_mipmap_path']:.2f} (path) / "
                f"×{num['geomean_speedup_driver_mipmap_primary']:.2f} (camera); TFDM takes "
                f"×{num['geomean_steps_ratio_high']:.1f} the steps per camera ray of RMIP high (geomean).")

@@ -4,10 +4,12 @@
 //   - a texture-space quad-tree over a min-max mipmap, descended from the coarsest nodes
 //     covering T's cells (at most 2×2 roots: the level at which T's cell range spans at
 //     most two nodes per axis);
-//   - per node, a conservative world box of the micro-geometry over node ∩ T's uv box
-//     from the node's [min, max] (oblong's interval bounds, rect_bounds.h: TFDM's affine
-//     arithmetic, made conservative for normalised normals), and a ray/box test against
-//     [tmin, closest hit so far];
+//   - per node, a conservative box of the micro-geometry over node ∩ T's uv box from the
+//     node's [min, max] (oblong's interval bounds, rect_bounds.h: TFDM's affine
+//     arithmetic, made conservative for normalised normals), axis-aligned in T's texture
+//     frame (the map's u axis, the face normal and their cross product: GfxExp's TFDM
+//     bounds in texture space) or, with the parameter `boxes: "world"`, in world
+//     space; and a ray/box test against [tmin, closest hit so far];
 //   - nodes whose square misses T's uv triangle are skipped without a box test;
 //   - children in a fixed order from the signs of the ray's texture-space direction;
 //   - leaves at single cells of the micro-geometry, tested with the same watertight
@@ -165,10 +167,39 @@ struct Roots {
   }
 };
 
+// T's texture frame: an orthonormal basis with the map's u direction (PX) first and the
+// face normal last, and T's local frame with P and N expressed in it. boxOverRect on
+// that frame bounds the same micro-geometry (the interval arithmetic holds in any
+// orthonormal basis, and |N| is unchanged), with boxes aligned to the node's sides and
+// to the base surface instead of to the world's axes.
+struct TextureFrame {
+  dvec3 axis[3]{dvec3(1, 0, 0), dvec3(0, 1, 0), dvec3(0, 0, 1)};
+  LocalFrame local;
+  dvec3 rot(const dvec3& v) const { return {glm::dot(axis[0], v), glm::dot(axis[1], v), glm::dot(axis[2], v)}; }
+  static TextureFrame make(const LocalFrame& F, const DisplacedTriangle& T, bool world) {
+    TextureFrame t;
+    t.local = F;
+    const dvec3 n = glm::cross(dvec3(T.p[1]) - dvec3(T.p[0]), dvec3(T.p[2]) - dvec3(T.p[0]));
+    if (world || !(glm::length(n) > 0) || !(glm::length(F.PX) > 0)) return t;
+    t.axis[2] = glm::normalize(n);
+    t.axis[0] = glm::normalize(F.PX - glm::dot(F.PX, t.axis[2]) * t.axis[2]);
+    t.axis[1] = glm::cross(t.axis[2], t.axis[0]);
+    t.local.Pc = t.rot(F.Pc), t.local.PX = t.rot(F.PX), t.local.PY = t.rot(F.PY);
+    t.local.Nc = t.rot(F.Nc), t.local.NX = t.rot(F.NX), t.local.NY = t.rot(F.NY);
+    return t;
+  }
+};
+
 class Tfdm final : public Intersector {
  public:
-  Tfdm(TraversalMesh mesh, std::vector<Roots> roots, std::unique_ptr<CellPyramid> pyr, int maxRootLevel)
-      : mesh_(std::move(mesh)), roots_(std::move(roots)), pyr_(std::move(pyr)), maxRootLevel_(maxRootLevel) {}
+  Tfdm(TraversalMesh mesh, std::vector<Roots> roots, std::vector<TextureFrame> frames, std::unique_ptr<CellPyramid> pyr,
+       int maxRootLevel, bool worldBoxes)
+      : mesh_(std::move(mesh)),
+        roots_(std::move(roots)),
+        texFrames_(std::move(frames)),
+        pyr_(std::move(pyr)),
+        maxRootLevel_(maxRootLevel),
+        worldBoxes_(worldBoxes) {}
   std::string name() const override { return "tfdm"; }
   size_t size() const override { return mesh_.tris.size(); }
   // Embree's bounds: the AABB of T's bounding prism (heights from the root nodes).
@@ -177,7 +208,8 @@ class Tfdm final : public Intersector {
     MemoryReport r{{"tfdm/mipmap", pyr_->bytes()}};
     if (pyr_->upper())
       for (MemoryItem m : pyr_->upper()->memory()) r.push_back({"tfdm/upper_levels (" + m.name + ")", m.bytes});
-    r.push_back({"tfdm/triangles", mesh_.bytes() + roots_.capacity() * sizeof(Roots)});
+    r.push_back({"tfdm/triangles",
+                 mesh_.bytes() + roots_.capacity() * sizeof(Roots) + texFrames_.capacity() * sizeof(TextureFrame)});
     return r;
   }
   nlohmann::json describe() const override {
@@ -185,6 +217,7 @@ class Tfdm final : public Intersector {
             {"stored_levels", pyr_->storedTop() + 1},
             {"max_root_level", maxRootLevel_},
             {"upper_levels", pyr_->upper() ? std::string(pyr_->upper()->name()) : std::string("folded")},
+            {"boxes", worldBoxes_ ? "world" : "texture"},
             {"bounds", "prism AABB"}};
   }
 
@@ -193,15 +226,20 @@ class Tfdm final : public Intersector {
     if (!P.valid) return false;
     const DisplacedTriangle& T = mesh_.tris[prim];
     const LocalFrame& F = mesh_.frames[prim];
+    const TextureFrame& X = texFrames_[prim];
     const CellRange& cr = mesh_.cells[prim];
     const Displacement& d = mesh_.disp;
     ++c.prisms;
     OBLONG_STAT_INC(tfPrisms);
 
-    const dvec3 O(r.o), D(r.d), invD = 1.0 / D;
+    const dvec3 O(r.o), D(r.d);
     const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
     const RayMargins m = RayMargins::make(P, maxAbsVertex(T), maxO);
-    const double tSlackAbs = OBLONG_TRAV_T_ABS_PADS * m.boxPad / glm::length(D);
+    // The ray in the boxes' frame; its rotation's rounding (and the frame's) is padded.
+    const dvec3 Ob = X.rot(O), Db = X.rot(D), invDb = 1.0 / Db;
+    const double boxPad =
+        m.boxPad + (worldBoxes_ ? 0.0 : OBLONG_TRAV_OBB_ROUND * (maxO + maxAbsVertex(T) + std::abs(P.a) + std::abs(P.b) + 1));
+    const double tSlackAbs = OBLONG_TRAV_T_ABS_PADS * boxPad / glm::length(D);
     auto slack = [&](double t) { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tSlackAbs; };
     const dvec2 uvLo = d.toSample(T.uvBox.lo) - dvec2(F.origin), uvHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
     const double mMin = double(T.minNormalLength);
@@ -256,10 +294,10 @@ class Tfdm final : public Intersector {
       const Interval h = d.toHeight(pyr_->node(n.level, n.x, n.y));
       const dvec2 lo = glm::max(dvec2(double(cx0 - F.origin.x), double(cy0 - F.origin.y)), uvLo);
       const dvec2 hi = glm::min(dvec2(double(cx1 + 1 - F.origin.x), double(cy1 + 1 - F.origin.y)), uvHi);
-      const BoxD box = boxOverRect(F, mMin, lo, hi, h.lo, h.hi, m.boxPad);
+      const BoxD box = boxOverRect(X.local, mMin, lo, hi, h.lo, h.hi, boxPad);
       double t0 = r.tmin - slack(r.tmin);
       double t1 = best.found ? double(best.t) + slack(best.t) : double(r.tmax) + slack(r.tmax);
-      box.clip(O, invD, t0, t1);
+      box.clip(Ob, invDb, t0, t1);
       if (!(t0 <= t1)) continue;
       if (n.level == 0) {
         ++local.cellsMarched;
@@ -310,11 +348,17 @@ class Tfdm final : public Intersector {
 
   TraversalMesh mesh_;
   std::vector<Roots> roots_;
+  std::vector<TextureFrame> texFrames_;
   std::unique_ptr<CellPyramid> pyr_;
   int maxRootLevel_;
+  bool worldBoxes_;
 };
 
-std::unique_ptr<Intersector> makeTfdm(ParamSet&, const BaselineContext& ctx) {
+std::unique_ptr<Intersector> makeTfdm(ParamSet& params, const BaselineContext& ctx) {
+  const std::string boxFrame = params.get<std::string>("boxes", "texture");
+  if (boxFrame != "texture" && boxFrame != "world")
+    fail(params.where(), "boxes must be \"texture\" or \"world\", got \"{}\"", boxFrame);
+  const bool world = boxFrame == "world";
   const Displacement& disp = ctx.disp;
   std::vector<DisplacedTriangle>& tris = *ctx.triangles;
   std::vector<Roots> roots(tris.size());
@@ -344,7 +388,10 @@ std::unique_ptr<Intersector> makeTfdm(ParamSet&, const BaselineContext& ctx) {
     return disp.toHeight(h);
   });
   warnSkippedTriangles(mesh, "tfdm");
-  return std::make_unique<Tfdm>(std::move(mesh), std::move(roots), std::move(pyr), top);
+  std::vector<TextureFrame> frames(mesh.tris.size());
+  for (size_t i = 0; i < mesh.tris.size(); ++i)
+    if (mesh.params[i].valid) frames[i] = TextureFrame::make(mesh.frames[i], mesh.tris[i], world);
+  return std::make_unique<Tfdm>(std::move(mesh), std::move(roots), std::move(frames), std::move(pyr), top, world);
 }
 
 }  // namespace
