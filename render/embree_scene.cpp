@@ -271,6 +271,7 @@ TraversalConfig traversalConfigOf(const Scene& scene) {
   c.splitter = scene.splitter.name;
   c.splitterParams = scene.splitter.params;
   c.baseline = scene.baseline.name;
+  c.source = scene.path;
   c.baselineParams = scene.baseline.params;
   c.marchingScale = scene.marchingScale;
   c.inversionInTraversal = scene.inversionInTraversal;

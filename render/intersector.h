@@ -80,6 +80,10 @@ struct TraversalConfig {
   nlohmann::json rangeParams = nlohmann::json::object();
   nlohmann::json inverterParams = nlohmann::json::object();
   nlohmann::json splitterParams = nlohmann::json::object();
+  // The scene file the choices come from ("" when built in code): errors about unknown
+  // names and parameters name it.
+  std::string source;
+  std::string where(const std::string& slot) const { return source.empty() ? slot : source + ": " + slot; }
 };
 
 class Intersector {

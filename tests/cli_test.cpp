@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -241,10 +242,19 @@ TEST_CASE("oblong trace --baseline tfdm matches both oracles; a scene file can c
     CHECK(rc.at("steps").get<int64_t>() == rc.at("boxes").get<int64_t>() + rc.at("cells_marched").get<int64_t>());
     CHECK(rc.at("cells_marched").get<int64_t>() > 0);
   }
-  // Unknown names list what is registered.
+  // Unknown names list what is registered, from the command line and from a scene file.
   Run r = run("trace --rays " + csv + " -o " + (dir / "x.csv").string() + " --baseline tfdmm");
   CHECK(r.status == 1);
   CHECK_THAT(r.err, Catch::Contains("tfdm"));
+  const std::string badScene = (dir / "bad_baseline.json").string();
+  std::ofstream(badScene) << R"({"strategies": {"baseline": {"name": "tfdmm"}},
+    "meshes": [{"shape": {"type": "torus", "segments": [8, 6]},
+                "displacement": {"map": ")" OBLONG_SOURCE_DIR R"(/scenes/maps/cobbles_256.png", "scale": 0.05}}]})";
+  r = run("trace " + badScene + " --rays " + csv + " -o " + (dir / "y.csv").string());
+  CHECK(r.status == 1);
+  CHECK_THAT(r.err, Catch::Contains("strategies.baseline") && Catch::Contains("'tfdmm'") && Catch::Contains("tfdm;") &&
+                        Catch::Contains(badScene));
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
 }
 
 TEST_CASE("oblong trace: bad ray files and flags give one clear error line", "[cli][trace][bad_input]") {

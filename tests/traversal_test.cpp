@@ -58,6 +58,18 @@ TEST_CASE("the named splitters are registered and validate their parameters",
   bad = config("rmip", "newton", "midpoint2d");
   bad.baseline = "tessellated";
   CHECK_THROWS_WITH(createIntersector(bad, s.tris, s.disp), Catch::Contains("unknown baseline"));
+  // Baseline parameters are checked like strategy parameters.
+  TraversalConfig b;
+  b.baseline = "nope";
+  CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp),
+                    Catch::Contains("strategies.baseline") && Catch::Contains("'nope'") && Catch::Contains("tfdm"));
+  b.baseline = "tfdm";
+  b.baselineParams = {{"boxes", "diagonal"}};
+  CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("boxes") && Catch::Contains("diagonal"));
+  b.baselineParams = {{"bogus", 1}};
+  CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("strategies.baseline") && Catch::Contains("bogus"));
+  b.baselineParams = {{"boxes", "world"}};
+  CHECK_NOTHROW(createIntersector(b, s.tris, s.disp));
 }
 
 TEST_CASE("quadtree splits on the coarsest node-aligned grid line", "[traversal][quadtree]") {

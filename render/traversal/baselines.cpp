@@ -178,7 +178,7 @@ std::unique_ptr<Intersector> makeFixedStep(ParamSet& params, const BaselineConte
   const Displacement& disp = ctx.disp;
   const float step = params.get<float>("step", cfg.fixedStep);
   if (!(step >= 0) || !std::isfinite(step)) fail("traversal", "fixed step must be >= 0 (0: one texel), got {}", step);
-  ParamSet ips(cfg.inverterParams, "strategies.inverter");
+  ParamSet ips(cfg.inverterParams, cfg.where("strategies.inverter"));
   auto inv = createInverter(cfg.inverter, ips);
   TraversalMesh mesh;
   mesh.build(std::move(*ctx.triangles), disp, [&](const DisplacedTriangle& T) { return exactHeights(T, disp); });

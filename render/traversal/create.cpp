@@ -31,9 +31,9 @@ std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::
   if (!cfg.baseline.empty()) {
     const BaselineRegistry& reg = BaselineRegistry::instance();
     if (!reg.has(cfg.baseline))
-      fail("traversal", "unknown baseline '{}' (known: {}; the tessellated baseline is not an intersector)",
+      fail(cfg.where("strategies.baseline"), "unknown baseline '{}' (known: {}; the tessellated baseline is not an intersector)",
            cfg.baseline, reg.list());
-    ParamSet bps(cfg.baselineParams, "strategies.baseline");
+    ParamSet bps(cfg.baselineParams, cfg.where("strategies.baseline"));
     return reg.create(cfg.baseline, bps, BaselineContext{cfg, &triangles, disp});
   }
   if (!(cfg.marchingScale >= kMinMarchingScale) || !std::isfinite(cfg.marchingScale))
@@ -45,11 +45,11 @@ std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::
   boxes.reserve(triangles.size());
   for (const DisplacedTriangle& T : triangles)
     if (T.uvArea2 != 0.0f) boxes.push_back(T.uvBox);
-  ParamSet rps(cfg.rangeParams, "strategies.range");
+  ParamSet rps(cfg.rangeParams, cfg.where("strategies.range"));
   auto rq = createRangeQuery(cfg.range, rps, RangeQueryContext{disp, QueryNeeds::forRects(disp, boxes)});
-  ParamSet ips(cfg.inverterParams, "strategies.inverter");
+  ParamSet ips(cfg.inverterParams, cfg.where("strategies.inverter"));
   auto inv = createInverter(cfg.inverter, ips);
-  ParamSet sps(cfg.splitterParams, "strategies.splitter");
+  ParamSet sps(cfg.splitterParams, cfg.where("strategies.splitter"));
   auto split = createSplitter(cfg.splitter, sps);
 
   TraversalParts parts;
