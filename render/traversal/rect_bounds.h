@@ -22,7 +22,10 @@
 
 namespace oblong {
 
-inline BoxD boxOverRect(const LocalFrame& F, double m, const dvec2& lo, const dvec2& hi, double hlo, double hhi,
+// Frame: a LocalFrame, or anything with its P and N members (Pc, PX, PY, Nc, NX, NY)
+// expressed in another orthonormal basis (tfdm's texture frame).
+template <typename Frame>
+inline BoxD boxOverRect(const Frame& F, double m, const dvec2& lo, const dvec2& hi, double hlo, double hhi,
                         double pad) {
   BoxD box;
   dvec3 Nlo, Nhi;

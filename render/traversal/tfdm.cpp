@@ -168,24 +168,24 @@ struct Roots {
 };
 
 // T's texture frame: an orthonormal basis with the map's u direction (PX) first and the
-// face normal last, and T's local frame with P and N expressed in it. boxOverRect on
-// that frame bounds the same micro-geometry (the interval arithmetic holds in any
-// orthonormal basis, and |N| is unchanged), with boxes aligned to the node's sides and
-// to the base surface instead of to the world's axes.
+// face normal last, and T's P and N (LocalFrame's Pc, PX, PY, Nc, NX, NY) expressed in
+// it. boxOverRect on it bounds the same micro-geometry (the interval arithmetic holds in
+// any orthonormal basis, and |N| is unchanged), with boxes aligned to the node's sides
+// and to the base surface instead of to the world's axes.
 struct TextureFrame {
   dvec3 axis[3]{dvec3(1, 0, 0), dvec3(0, 1, 0), dvec3(0, 0, 1)};
-  LocalFrame local;
+  dvec3 Pc{0.0}, PX{0.0}, PY{0.0}, Nc{0.0}, NX{0.0}, NY{0.0};
   dvec3 rot(const dvec3& v) const { return {glm::dot(axis[0], v), glm::dot(axis[1], v), glm::dot(axis[2], v)}; }
   static TextureFrame make(const LocalFrame& F, const DisplacedTriangle& T, bool world) {
     TextureFrame t;
-    t.local = F;
     const dvec3 n = glm::cross(dvec3(T.p[1]) - dvec3(T.p[0]), dvec3(T.p[2]) - dvec3(T.p[0]));
-    if (world || !(glm::length(n) > 0) || !(glm::length(F.PX) > 0)) return t;
-    t.axis[2] = glm::normalize(n);
-    t.axis[0] = glm::normalize(F.PX - glm::dot(F.PX, t.axis[2]) * t.axis[2]);
-    t.axis[1] = glm::cross(t.axis[2], t.axis[0]);
-    t.local.Pc = t.rot(F.Pc), t.local.PX = t.rot(F.PX), t.local.PY = t.rot(F.PY);
-    t.local.Nc = t.rot(F.Nc), t.local.NX = t.rot(F.NX), t.local.NY = t.rot(F.NY);
+    if (!world && glm::length(n) > 0 && glm::length(F.PX) > 0) {
+      t.axis[2] = glm::normalize(n);
+      t.axis[0] = glm::normalize(F.PX - glm::dot(F.PX, t.axis[2]) * t.axis[2]);
+      t.axis[1] = glm::cross(t.axis[2], t.axis[0]);
+    }
+    t.Pc = t.rot(F.Pc), t.PX = t.rot(F.PX), t.PY = t.rot(F.PY);
+    t.Nc = t.rot(F.Nc), t.NX = t.rot(F.NX), t.NY = t.rot(F.NY);
     return t;
   }
 };
@@ -294,7 +294,7 @@ class Tfdm final : public Intersector {
       const Interval h = d.toHeight(pyr_->node(n.level, n.x, n.y));
       const dvec2 lo = glm::max(dvec2(double(cx0 - F.origin.x), double(cy0 - F.origin.y)), uvLo);
       const dvec2 hi = glm::min(dvec2(double(cx1 + 1 - F.origin.x), double(cy1 + 1 - F.origin.y)), uvHi);
-      const BoxD box = boxOverRect(X.local, mMin, lo, hi, h.lo, h.hi, boxPad);
+      const BoxD box = boxOverRect(X, mMin, lo, hi, h.lo, h.hi, boxPad);
       double t0 = r.tmin - slack(r.tmin);
       double t1 = best.found ? double(best.t) + slack(best.t) : double(r.tmax) + slack(r.tmax);
       box.clip(Ob, invDb, t0, t1);
