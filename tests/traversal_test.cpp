@@ -70,6 +70,11 @@ TEST_CASE("the named splitters are registered and validate their parameters",
   CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("strategies.baseline") && Catch::Contains("bogus"));
   b.baselineParams = {{"boxes", "world"}};
   CHECK_NOTHROW(createIntersector(b, s.tris, s.disp));
+  b.baseline = "fixedstep";  // its step from a scene file's strategies.baseline
+  b.baselineParams = {{"step", -1}};
+  CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("fixed step must be >= 0"));
+  b.baselineParams = {{"step", "far"}};
+  CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("strategies.baseline") && Catch::Contains("step"));
 }
 
 TEST_CASE("quadtree splits on the coarsest node-aligned grid line", "[traversal][quadtree]") {
