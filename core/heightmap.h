@@ -39,6 +39,10 @@ class HeightMap {
   // Texel without wrapping (0 <= i < W, 0 <= j < H).
   float atUnchecked(int i, int j) const { return texels_[size_t(j) * w_ + i]; }
 
+  // Edits a texel (wrap addressing). Structures built over the map are refreshed with
+  // RangeQuery::update over the changed samples.
+  void set(int i, int j, float v) { texels_[size_t(wrap(j, h_)) * w_ + wrap(i, w_)] = v; }
+
   Interval range() const;  // min and max texel
   size_t bytes() const { return texels_.size() * sizeof(float); }
 

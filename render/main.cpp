@@ -421,7 +421,10 @@ void printTraversal(const nlohmann::json& d) {
       }
       fmt::print("      {:<20}: {}\n", k, infoValue(k, v));
     }
-  if (rq.contains("layout") && rq.at("layout").value("stores_wrap", false))
+  if (rq.contains("layout") && rq.at("layout").value("stores_wrap", false) &&
+      rq.at("layout").value("layout", "") == "pairs")
+    fmt::print("      wrap     : blocks wrapping around the map border filled with the wrapped pixels (no extra bytes)\n");
+  else if (rq.contains("layout") && rq.at("layout").value("stores_wrap", false))
     fmt::print("      wrap     : corners wrapping around the map border stored{}\n",
                rq.at("layout").contains("wrap_bytes")
                    ? ": " + infoValue("wrap_bytes", rq.at("layout").at("wrap_bytes")) + " of it"

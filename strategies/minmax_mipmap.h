@@ -5,7 +5,8 @@
 // smallest level at which it spans at most two nodes per axis (up to four neighbouring
 // nodes); ranges crossing the border are split into non-crossing pieces.
 //
-// Parameters: none.
+// Parameters: bits  16 | 32, default 32: levels >= 1 as conservative 16-bit pairs
+// (strategies/quantize.h) or float pairs. Level 0 is the map's own floats either way.
 //
 // Levels are built only up to the one where two nodes cover QueryNeeds' largest extent
 // (DESIGN invariant 4); larger ranges use all the top built level's nodes they touch.
@@ -15,6 +16,7 @@
 #pragma once
 
 #include "core/stats.h"
+#include "strategies/quantize.h"
 #include "strategies/range_query.h"
 
 #include <bit>
@@ -32,20 +34,26 @@ class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
     int K = 0;                   // top built level
     std::vector<size_t> offset;  // offset of level k >= 1 at [k-1]
     size_t entries = 0;
-    size_t bytes() const { return entries * sizeof(Interval) + offset.size() * sizeof(size_t); }
+    int bits = 32;
+    size_t bytes() const { return entries * (bits == 16 ? 4 : 8) + offset.size() * sizeof(size_t); }
   };
-  static Layout layout(int W, int H, const QueryNeeds& needs);
+  static Layout layout(int W, int H, const QueryNeeds& needs, int bits = 32);
   static int levelSize(int n, int k) { return ((n - 1) >> k) + 1; }
 
-  MinMaxMipmap(const Displacement& d, const QueryNeeds& needs);
+  MinMaxMipmap(const Displacement& d, const QueryNeeds& needs, int bits = 32, Interval quantRange = {});
 
   std::string_view name() const override { return "minmax_mipmap"; }
-  size_t bytes() const override { return data_.size() * sizeof(Interval) + offset_.size() * sizeof(size_t); }
+  size_t bytes() const override { return levelBytes() + offset_.size() * sizeof(size_t); }
   MemoryReport memory() const override {
-    return {{"minmax_mipmap/levels", data_.size() * sizeof(Interval)},
-            {"minmax_mipmap/level_table", offset_.size() * sizeof(size_t)}};
+    return {{"minmax_mipmap/levels", levelBytes()}, {"minmax_mipmap/level_table", offset_.size() * sizeof(size_t)}};
   }
   bool exact() const override { return false; }
+  // Recomputes the nodes over the changed samples, level by level from their children.
+  void update(const SampleRange& changed) override;
+  std::span<const std::byte> storage() const override {
+    return bits_ == 16 ? std::as_bytes(std::span(q16_)) : std::as_bytes(std::span(data_));
+  }
+  int bits() const { return bits_; }
 
   // Levels 0..levels()-1 (level 0 = samples). Level k is levelWidth(k) x levelHeight(k).
   int levels() const { return K_ + 1; }
@@ -57,7 +65,8 @@ class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
       const float t = map().atUnchecked(i, j);
       return {t, t};
     }
-    return data_[offset_[k - 1] + size_t(j) * levelWidth(k) + i];
+    const size_t at = offset_[k - 1] + size_t(j) * levelWidth(k) + i;
+    return bits_ == 16 ? q_.decodePair(q16_[at]) : data_[at];
   }
 
   Interval rawRangeFast(const SampleRange& r) const {
@@ -74,7 +83,10 @@ class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
     nlohmann::json sizes = nlohmann::json::array();
     for (int k = 1; k <= K_; ++k) sizes.push_back({levelWidth(k), levelHeight(k)});
     const int full = int(std::bit_width(unsigned(std::max(map().width(), map().height()) - 1))) + 1;
-    return {{"levels", K_ + 1}, {"full_mipmap_levels", full}, {"level_sizes", sizes}, {"stores_wrap", false}};
+    nlohmann::json j = {{"levels", K_ + 1}, {"full_mipmap_levels", full}, {"level_sizes", sizes},
+                        {"stores_wrap", false}, {"bits", bits_}};
+    if (bits_ == 16) j["quantization"] = {{"base", q_.base}, {"step", q_.step}};
+    return j;
   }
 
  private:
@@ -96,9 +108,17 @@ class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
     return out;
   }
 
+  size_t levelBytes() const { return data_.size() * sizeof(Interval) + q16_.size() * sizeof(uint32_t); }
+  void build();
+  void buildNode(int k, int i, int j);  // node (i,j) of level k >= 1 from its children
+
   int K_ = 0;                   // top built level
-  std::vector<size_t> offset_;  // offset of level k >= 1 in data_ at [k-1]
-  std::vector<Interval> data_;
+  int bits_ = 32;
+  Interval quantRange_;         // requested 16-bit range (empty: derived from the map)
+  Quantizer16 q_;
+  std::vector<size_t> offset_;  // offset of level k >= 1 in the entries at [k-1]
+  std::vector<Interval> data_;  // bits 32
+  std::vector<uint32_t> q16_;   // bits 16
 };
 
 }  // namespace oblong

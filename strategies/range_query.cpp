@@ -3,6 +3,7 @@
 #include "strategies/range_query.h"
 
 #include "core/error.h"
+#include "strategies/quantize.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,6 +37,19 @@ Interval bruteForceRange(const HeightMap& m, const SampleRange& r) {
       for (int b = 0; b < px.count; ++b)
         for (int i = px.lo[b]; i <= px.hi[b]; ++i) out.extend(m.atUnchecked(i, j));
   return out;
+}
+
+bool keepsQuantizer(const HeightMap& m, const SampleRange& changed, const Quantizer16& q, Interval& requested) {
+  const Interval edited = bruteForceRange(m, changed);
+  if (!requested.isEmpty()) {
+    if (q.covers(edited)) return true;
+    requested = {};
+    return false;
+  }
+  const Quantizer16 unit = Quantizer16::over({0.0f, 1.0f});
+  if (q.base == unit.base && q.step == unit.step && edited.lo >= 0.0f && edited.hi <= 1.0f) return true;
+  const Quantizer16 fresh = Quantizer16::over(Quantizer16::rangeFor(m.range()));
+  return fresh.base == q.base && fresh.step == q.step;
 }
 
 void throwLodUnsupported(std::string_view strategy, float lod) {

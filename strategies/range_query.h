@@ -23,6 +23,7 @@
 #include "core/registry.h"
 
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -65,6 +66,11 @@ class RangeQuery {
   virtual MemoryReport memory() const { return {{std::string(name()), bytes()}}; }
   // True when rawRange equals the brute-force range on every sample range.
   virtual bool exact() const = 0;
+  // The map's samples in `changed` (inclusive, may wrap) were edited: refresh what they
+  // affect. The result equals a full build on the edited map, bit for bit.
+  virtual void update(const SampleRange& changed) = 0;
+  // The stored entries as raw bytes (for bit-for-bit comparisons of builds).
+  virtual std::span<const std::byte> storage() const = 0;
   // What was built, for `oblong info` and --stats: name, exactness, bytes and the
   // QueryNeeds it was built for; strategies add their own layout (describeLayout).
   nlohmann::json describe() const;
@@ -156,6 +162,13 @@ inline AxisPieces splitAxis(int a0, int a1, int n) {
   }
   return p;
 }
+
+// After an edit of the samples in `changed`: do the 16-bit codes over `q` stay those a
+// fresh build would write? A requested range (non-empty `requested`) holds while it
+// covers the edited samples (else it is dropped); the derived range [0, 1] holds while
+// the edited samples stay in it; any other derived range needs a scan of the whole map.
+struct Quantizer16;
+bool keepsQuantizer(const HeightMap& m, const SampleRange& changed, const Quantizer16& q, Interval& requested);
 
 // Brute force over the texels of a sample range (wrapping): the oracle.
 Interval bruteForceRange(const HeightMap& m, const SampleRange& r);

@@ -1,35 +1,41 @@
 // rmip: rectangular min-max image pyramid (Thonat et al. 2023, §5, Eq. 5, Alg. 2;
-// after Amir et al. 2007). Layer (p,q) holds, for every corner (x,y), the min and max
-// over the 2^p x 2^q block at that corner; a range of extent (w,h) is the union of four
-// such blocks with (p,q) = floor(log2(w,h)) at the range's four corners.
+// after Amir et al. 2007). Layer (p,q) bounds every 2^p x 2^q block of pixels by its
+// corner; a range of extent (w,h) is the union of the blocks with (p,q) = floor(log2(w,h))
+// at its four corners: four lookups.
+//
+// Two layouts (docs/range_query.md has the measurements behind the default):
+//   "pairs"   (default) layers p, q >= 1 only; entry (i,j) of layer (p,q) holds the
+//             min/max over the pixels [i 2^p, i 2^p + 2^(p+1) - 2] x [j 2^q, ...]: the
+//             union of every 2^p x 2^q block whose corner falls in [i 2^p, (i+1) 2^p)
+//             (corner stride = block size). About N^2 entries in all, the paper's
+//             "order of a classical mipmap" (§5). A range narrower than 2 pixels uses
+//             layer 1 (snapped ranges are at least 2 samples wide).
+//   "corners" every layer p, q >= 0, entries at corner strides 2^max(p-c,0) for a
+//             `compression` c: (c+2)^2 N^2 entries, exact when c >= the top layer.
+// Storage `bits`: 16 (default) codes each pair in one 32-bit word, rounded outward
+// (strategies/quantize.h); 32 stores float pairs.
 //
 // Parameters (ParamSet):
-//   resolution  int >= 0, default 0   RMIP resolution; 0 = the map's. Otherwise the
-//                                     map is min/max-downsampled by f = max(1,
-//                                     ceil(max(W,H)/resolution)) (paper Table 1
-//                                     low/normal/high-res RMIP).
-//   compression int in [0,1000], default 1
-//                                     layer (p,q) keeps one corner entry per
-//                                     2^max(p-c,0) x 2^max(q-c,0) block (entry = union
-//                                     of the regions of its corners); memory ~ N^2
-//                                     instead of N^2 (1+log N)^2; the covered range
-//                                     grows by < 2^(p-c) on each side, a factor
-//                                     < 1 + 2^(1-c) per axis whatever the anisotropy.
-//                                     >= log2 N: uncompressed.
-//                                     Default chosen with the benchmark, see
-//                                     docs/range_query.md.
+//   layout      "pairs" | "corners", default "pairs"
+//   bits        16 | 32, default 16
+//   resolution  int >= 0, default 0   RMIP resolution; 0 = the map's. Otherwise the map
+//                                     is min/max-downsampled by f = max(1,
+//                                     ceil(max(W,H)/resolution)) (paper Table 1).
+//   compression int in [0,1000], default 1, layout "corners" only.
 //
-// Only layers up to the largest query extent in QueryNeeds are built; larger queries
-// are covered by several top-layer blocks. Corners wrapping around the border are
-// stored only when QueryNeeds::wrap (DESIGN invariant 4); otherwise crossing queries
-// are split at the border.
+// Only layers up to the largest query extent in QueryNeeds are built; larger queries are
+// covered by several top-layer blocks. Entries whose blocks wrap round the border are
+// filled with the wrapped pixels only when QueryNeeds::wrap (DESIGN invariant 4);
+// otherwise crossing queries are split at the border.
 #pragma once
 
 #include "core/stats.h"
+#include "strategies/quantize.h"
 #include "strategies/range_query.h"
 
 #include <bit>
 #include <cstdint>
+#include <span>
 
 namespace oblong {
 
@@ -40,73 +46,103 @@ OBLONG_STAT_COUNTER("rmip/BeyondBuiltLayers", rmipBeyondLayers);
 
 class Rmip final : public RangeQueryImpl<Rmip> {
  public:
+  enum class Scheme { Pairs, Corners };
   struct Options {
     int resolution = 0;  // 0 = the map's
-    int compression = 1;
+    int compression = 1;  // Corners only
+    Scheme layout = Scheme::Pairs;
+    int bits = 16;          // 16 or 32
+    Interval quantRange{};  // 16-bit codes' range; empty: Quantizer16::rangeFor(map range)
   };
   struct Layer {
-    uint32_t offset;  // into data_
-    int nx, ny;       // entries per row / column
-    int shiftX, shiftY;  // corner stride = 1 << shift
+    uint32_t offset;  // into the entries, in entries
+    int nx, ny;       // entries per row / column (0: layer not stored)
+    int shiftX, shiftY;  // corner x is looked up at entry x >> shiftX
   };
   // What the constructor builds for a W x H map (the one copy of the layout formulas):
   // bytes() equals the built Rmip's bytes(); buildBytes() adds the scratch the build
-  // holds at the same time (row and column passes, four float pairs per pixel).
+  // holds at the same time.
   struct Layout {
-    int f = 1, rw = 0, rh = 0, P = 0, Q = 0, c = 0;
+    int f = 1, rw = 0, rh = 0, P = 0, Q = 0, c = 0, p0 = 0;
     bool wrap = false;
-    std::vector<Layer> layers;  // offsets filled while they fit in 32 bits
+    int bits = 16;
+    Scheme scheme = Scheme::Pairs;
+    std::vector<Layer> layers;  // (P+1) x (Q+1), index p * (Q+1) + q; rows p < p0 empty
     size_t entries = 0;
-    size_t bytes() const { return entries * sizeof(Interval) + layers.size() * sizeof(Layer); }
-    size_t scratchBytes() const { return 4 * size_t(rw) * rh * sizeof(Interval); }
+    size_t entryBytes() const { return bits == 16 ? 4 : 8; }
+    size_t bytes() const { return entries * entryBytes() + layers.size() * sizeof(Layer); }
+    size_t scratchBytes() const;
     size_t buildBytes() const { return bytes() + scratchBytes(); }
   };
   static Layout layout(int W, int H, const QueryNeeds& needs, const Options& o);
   // Throws the memory check's one-line oblong::Error when the build would not fit, with
-  // the largest lower resolution and the other strategies that would.
+  // the alternatives that would.
   static void checkMemory(const HeightMap& m, const QueryNeeds& needs, const Options& o);
 
   Rmip(const Displacement& d, const QueryNeeds& needs, const Options& o);
 
   std::string_view name() const override { return "rmip"; }
-  size_t bytes() const override { return data_.size() * sizeof(Interval) + layers_.size() * sizeof(Layer); }
+  size_t bytes() const override { return entryBytes() + layers_.size() * sizeof(Layer); }
   MemoryReport memory() const override {
-    return {{"rmip/layers", data_.size() * sizeof(Interval)}, {"rmip/layer_table", layers_.size() * sizeof(Layer)}};
+    return {{"rmip/layers", entryBytes()}, {"rmip/layer_table", layers_.size() * sizeof(Layer)}};
   }
-  bool exact() const override { return f_ == 1 && P_ <= c_ && Q_ <= c_; }
+  bool exact() const override {
+    return scheme_ == Scheme::Corners && bits_ == 32 && f_ == 1 && P_ <= c_ && Q_ <= c_;
+  }
+  // Refreshes the entries whose pixels overlap the changed samples (the map was edited
+  // there): the result equals a full build with the same options and 16-bit range, bit for
+  // bit. "pairs" updates only those entries; "corners" rebuilds. An edit leaving the 16-bit
+  // range re-encodes everything over the new range.
+  void update(const SampleRange& changed) override;
+
+  std::span<const std::byte> storage() const override { return std::as_bytes(words()); }
 
   int downsample() const { return f_; }  // samples per RMIP pixel, per axis
   int resolutionX() const { return rw_; }
   int resolutionY() const { return rh_; }
-  int layersX() const { return P_ + 1; }  // p = 0..P
+  int layersX() const { return P_ + 1; }  // p = 0..P (p < firstLayer() not stored)
   int layersY() const { return Q_ + 1; }
+  int firstLayer() const { return p0_; }
+  int bits() const { return bits_; }
+  Scheme scheme() const { return scheme_; }
   bool storesWrap() const { return wrap_; }
+  const Quantizer16& quantizer() const { return q_; }
   // Read-only view of the built pyramid, for copies of it (the Vulkan upload,
-  // render/vulkan/rmip_layout.h): the layer table, (p, q) at index p * layersY() + q for
-  // p < layersX(), q < layersY(), and the entries its offsets point into.
+  // render/vulkan/rmip_layout.h) and bit-for-bit comparisons: the layer table, (p, q) at
+  // index p * layersY() + q, and the entries its offsets point into, as 32-bit words
+  // (bits 16: one word per entry; bits 32: the float bits of lo, then hi).
   const std::vector<Layer>& layerTable() const { return layers_; }
-  const std::vector<Interval>& layerEntries() const { return data_; }
+  std::span<const uint32_t> words() const {
+    if (bits_ == 16) return {q16_.data(), q16_.size()};
+    return {reinterpret_cast<const uint32_t*>(f32_.data()), f32_.size() * 2};
+  }
 
   Interval rawRangeFast(const SampleRange& r) const {
-    OBLONG_STAT_INC(rmipQueries);
-    int x0, x1, y0, y1;
-    toPixels(r.x0, r.x1, map().width(), rw_, x0, x1);
-    toPixels(r.y0, r.y1, map().height(), rh_, y0, y1);
-    if (wrap_ || (x1 < rw_ && y1 < rh_)) return block(x0, x1, y0, y1);
-    // No wrapping corners stored: split at the border into non-crossing pieces.
-    OBLONG_STAT_INC(rmipBorderSplits);
-    const int xa[2] = {x0, 0}, xb[2] = {std::min(x1, rw_ - 1), x1 - rw_};
-    const int ya[2] = {y0, 0}, yb[2] = {std::min(y1, rh_ - 1), y1 - rh_};
-    Interval out;
-    for (int b = 0; b < (y1 < rh_ ? 1 : 2); ++b)
-      for (int a = 0; a < (x1 < rw_ ? 1 : 2); ++a) out.extend(block(xa[a], xb[a], ya[b], yb[b]));
-    return out;
+    return bits_ == 16 ? q_.decodePair(rangeT(q16_.data(), r)) : rangeT(f32_.data(), r);
   }
 
  protected:
   nlohmann::json describeLayout() const override;
 
  private:
+  size_t entryBytes() const { return q16_.size() * sizeof(uint32_t) + f32_.size() * sizeof(Interval); }
+  void build();
+  void buildCorners();
+  template <typename T, typename Enc>
+  void buildPairs(T* data, const Enc& enc);
+  template <typename T, typename Enc>
+  void updatePairs(T* data, const Enc& enc, const SampleRange& changed);
+
+  static Interval joinT(const Interval& a, const Interval& b) {
+    return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+  }
+  static uint32_t joinT(uint32_t a, uint32_t b) { return join16(a, b); }
+  template <typename T>
+  static T emptyT() {
+    if constexpr (std::is_same_v<T, uint32_t>) return kEmpty16;
+    else return Interval{};
+  }
+
   // Sample axis range -> RMIP pixel range: start in [0,n), end possibly >= n (crossing
   // the border), or the whole axis [0,n-1].
   void toPixels(int a0, int a1, int size, int n, int& s, int& e) const {
@@ -119,23 +155,42 @@ class Rmip final : public RangeQueryImpl<Rmip> {
 
   static int log2floor(int v) { return int(std::bit_width(unsigned(v))) - 1; }
 
+  template <typename T>
+  T rangeT(const T* d, const SampleRange& r) const {
+    OBLONG_STAT_INC(rmipQueries);
+    int x0, x1, y0, y1;
+    toPixels(r.x0, r.x1, map().width(), rw_, x0, x1);
+    toPixels(r.y0, r.y1, map().height(), rh_, y0, y1);
+    if (wrap_ || (x1 < rw_ && y1 < rh_)) return block(d, x0, x1, y0, y1);
+    // Wrapped blocks not stored: split at the border into non-crossing pieces.
+    OBLONG_STAT_INC(rmipBorderSplits);
+    const int xa[2] = {x0, 0}, xb[2] = {std::min(x1, rw_ - 1), x1 - rw_};
+    const int ya[2] = {y0, 0}, yb[2] = {std::min(y1, rh_ - 1), y1 - rh_};
+    T out = emptyT<T>();
+    for (int b = 0; b < (y1 < rh_ ? 1 : 2); ++b)
+      for (int a = 0; a < (x1 < rw_ ? 1 : 2); ++a) out = joinT(out, block(d, xa[a], xb[a], ya[b], yb[b]));
+    return out;
+  }
+
   // Pixel block [x0,x1]x[y0,y1] (x0 in [0,rw), x1 < x0 + rw; crossing only if wrap_):
-  // Eq. 5, with blocks of the top built layer tiled over ranges beyond it.
-  Interval block(int x0, int x1, int y0, int y1) const {
-    const int p = std::min(log2floor(x1 - x0 + 1), P_), q = std::min(log2floor(y1 - y0 + 1), Q_);
+  // Eq. 5, with blocks of the top built layer tiled over ranges beyond it. A block
+  // narrower than the first stored layer's (pairs: 1 pixel) uses that layer's entry at x0.
+  template <typename T>
+  T block(const T* d, int x0, int x1, int y0, int y1) const {
+    const int p = std::clamp(log2floor(x1 - x0 + 1), p0_, P_), q = std::clamp(log2floor(y1 - y0 + 1), p0_, Q_);
     const Layer& L = layers_[size_t(p) * (Q_ + 1) + q];
     const int lx = 1 << p, ly = 1 << q;
-    const Interval* d = data_.data() + L.offset;
-    Interval out;
+    d += L.offset;
+    T out = emptyT<T>();
     for (int cy = y0;; cy += ly) {
       const bool lastY = cy + ly - 1 >= y1;
-      if (lastY) cy = y1 - ly + 1;
-      const Interval* row = d + size_t((cy >= rh_ ? cy - rh_ : cy) >> L.shiftY) * L.nx;
+      if (lastY) cy = std::max(y1 - ly + 1, y0);
+      const T* row = d + size_t((cy >= rh_ ? cy - rh_ : cy) >> L.shiftY) * L.nx;
       for (int cx = x0;; cx += lx) {
         const bool lastX = cx + lx - 1 >= x1;
-        if (lastX) cx = x1 - lx + 1;
+        if (lastX) cx = std::max(x1 - lx + 1, x0);
         OBLONG_STAT_INC(rmipLookups);
-        out.extend(row[(cx >= rw_ ? cx - rw_ : cx) >> L.shiftX]);
+        out = joinT(out, row[(cx >= rw_ ? cx - rw_ : cx) >> L.shiftX]);
         if (lastX) break;
       }
       if (lastY) break;
@@ -147,10 +202,13 @@ class Rmip final : public RangeQueryImpl<Rmip> {
   }
 
   Options opt_;
-  int f_ = 1, rw_ = 0, rh_ = 0, P_ = 0, Q_ = 0, c_ = 0;
+  Scheme scheme_ = Scheme::Pairs;
+  int f_ = 1, rw_ = 0, rh_ = 0, P_ = 0, Q_ = 0, c_ = 0, p0_ = 0, bits_ = 16;
   bool wrap_ = false;
+  Quantizer16 q_;
   std::vector<Layer> layers_;  // (P+1) x (Q+1), index p * (Q+1) + q
-  std::vector<Interval> data_;
+  std::vector<uint32_t> q16_;  // bits 16
+  std::vector<Interval> f32_;  // bits 32
 };
 
 }  // namespace oblong

@@ -641,7 +641,8 @@ TEST_CASE("Ctrl-C during render writes what was rendered, marked partial, and ex
 }
 
 TEST_CASE("oblong info builds each range query once", "[bad_input][cli]") {
-  // A full-resolution rmip of a 2048^2 map is ~290 MiB. Against a 64^2 map, the peak
+  // A full-resolution rmip of a 2048^2 map in the "corners" layout (compression 1, float
+  // pairs) is ~290 MiB. Against a 64^2 map, the peak
   // grows by the structure, the map and the build's temporaries (~1.5 x the structure);
   // built twice (once for the prisms, once to show it) it would grow by ~2.5 x.
   const fs::path dir = test::scratchDir("cli_info_once");
@@ -651,7 +652,7 @@ TEST_CASE("oblong info builds each range query once", "[bad_input][cli]") {
     const std::string map = fmt::format("map{}.png", n), scene = (dir / fmt::format("s{}.json", n)).string();
     test::writeGray((dir / map).string(), n, n, v, OIIO::TypeDesc::UINT16);
     write(scene, R"({"meshes": [{"shape": {"type": "plane", "size": 2}, "displacement": {"map": ")" + map +
-                     R"(", "scale": 0.01}}]})");
+                     R"(", "scale": 0.01}}], "strategies": {"range": {"name": "rmip", "layout": "corners", "bits": 32}}})");
     const Run r = runCli("info " + scene, n);
     INFO(r.out << r.err);
     REQUIRE(r.status == 0);

@@ -124,20 +124,33 @@ TEST_CASE("range-query estimates equal the bytes of the built structures", "[mem
     for (const QueryNeeds& needs : needsFor(*map)) {
       INFO(W << "x" << H << " needs " << needs.maxExtentX << "x" << needs.maxExtentY << " wrap " << needs.wrap);
       for (int res : {0, std::max(W, H) / 2, 7})
-        for (int comp : {0, 1, 2, 99}) {
-          if (W * H > 1 << 16 && comp == 99) continue;  // uncompressed 1024^2: ~1 GB
-          INFO("resolution " << res << " compression " << comp);
-          const Rmip::Options o{res, comp};
-          const auto rq = make("rmip", {{"resolution", res}, {"compression", comp}}, d, needs);
-          const Rmip::Layout L = Rmip::layout(W, H, needs, o);
-          CHECK(L.bytes() == rq->bytes());
-          const auto* r = dynamic_cast<const Rmip*>(rq.get());
-          REQUIRE(r);
-          CHECK(L.rw == r->resolutionX());
-          CHECK(L.P + 1 == r->layersX());
-          CHECK(L.buildBytes() == L.bytes() + 4 * size_t(L.rw) * L.rh * sizeof(Interval));
-        }
+        for (int comp : {-1, 0, 1, 2, 99})  // -1: "pairs"
+          for (int bits : {16, 32}) {
+            if (W * H > 1 << 16 && comp == 99) continue;  // uncompressed 1024^2: ~1 GB
+            INFO("resolution " << res << " compression " << comp << " bits " << bits);
+            const Rmip::Options o{.resolution = res, .compression = std::max(comp, 0),
+                                  .layout = comp < 0 ? Rmip::Scheme::Pairs : Rmip::Scheme::Corners, .bits = bits};
+            json params{{"resolution", res}, {"bits", bits}, {"layout", comp < 0 ? "pairs" : "corners"}};
+            if (comp >= 0) params["compression"] = comp;
+            const auto rq = make("rmip", params, d, needs);
+            const Rmip::Layout L = Rmip::layout(W, H, needs, o);
+            CHECK(L.bytes() == rq->bytes());
+            const auto* r = dynamic_cast<const Rmip*>(rq.get());
+            REQUIRE(r);
+            CHECK(L.rw == r->resolutionX());
+            CHECK(L.P + 1 == r->layersX());
+            const size_t entryBytes = bits == 16 ? 4 : 8;
+            if (comp < 0)
+              CHECK(L.buildBytes() == L.bytes() + size_t(L.rh) * ((L.rw + 1) / 2) * entryBytes);
+            else
+              CHECK(L.buildBytes() == L.bytes() + 4 * size_t(L.rw) * L.rh * sizeof(Interval) +
+                                          (bits == 16 ? L.entries * sizeof(Interval) : 0));
+          }
       CHECK(MinMaxMipmap::layout(W, H, needs).bytes() == make("minmax_mipmap", json::object(), d, needs)->bytes());
+      CHECK(MinMaxMipmap::layout(W, H, needs, 16).bytes() ==
+            make("minmax_mipmap", {{"bits", 16}}, d, needs)->bytes());
+      CHECK(SafetyZones::bytes(W, H, SafetyZones::resolveDeltas(W, H, needs, {}).size(), 16) ==
+            make("safety_zones", {{"bits", 16}}, d, needs)->bytes());
       CHECK(SafetyZones::bytes(W, H, SafetyZones::resolveDeltas(W, H, needs, {}).size()) ==
             make("safety_zones", json::object(), d, needs)->bytes());
       const std::vector<int> custom{5, 1, 1, 3};
@@ -151,46 +164,45 @@ TEST_CASE("a range query that does not fit is refused in one line with what woul
   const auto map = randomMap(1024, 1024, 7);
   const Displacement d{map, 0.5f, 0.0f, vec2(1.0f)};
   const QueryNeeds needs = QueryNeeds::all(*map);
-  // rmip at full resolution: 72 MiB of layers + 32 MiB of scratch; the budget is 51 MiB.
-  const size_t full = Rmip::layout(1024, 1024, needs, {}).buildBytes();
+  // rmip "corners" (compression 1, 16-bit) at full resolution: 36 MiB of codes + 32 MiB
+  // of row/column scratch + 72 MiB of float entries before encoding; the budget is 51 MiB.
+  const json corners{{"layout", "corners"}};
+  const Rmip::Options cornersO{.layout = Rmip::Scheme::Corners};
+  const size_t full = Rmip::layout(1024, 1024, needs, cornersO).buildBytes();
   MemoryLimit lim("64M");
   REQUIRE(!fitsInMemory(full));
 
-  const std::string msg = errorOf([&] { make("rmip", json::object(), d, needs); });
+  const std::string msg = errorOf([&] { make("rmip", corners, d, needs); });
   INFO(msg);
   CHECK(msg.find('\n') == std::string::npos);
   CHECK_THAT(msg, Contains("map1024x1024.png: rmip needs " + humanBytes(full)) && Contains("1024x1024 pixels") &&
                       Contains("may be used") && Contains("64.0 MiB") && Contains("OBLONG_MEMORY_LIMIT"));
-  // The largest lower resolution that fits (512: 18 + 8 MiB), compression 0 (full
-  // resolution, 32 + 32 MiB, does not fit) is not offered, the mipmap is.
-  const size_t half = Rmip::layout(1024, 1024, needs, {512, 1}).buildBytes();
+  // The largest lower resolution that fits (512), the default layout and the mipmap.
+  Rmip::Options halfO = cornersO;
+  halfO.resolution = 512;
+  const size_t half = Rmip::layout(1024, 1024, needs, halfO).buildBytes();
+  const size_t pairs = Rmip::layout(1024, 1024, needs, {}).buildBytes();
   CHECK_THAT(msg, Contains(fmt::format("try \"resolution\": 512 ({})", humanBytes(half))) &&
-                      !Contains("\"compression\"") &&
+                      Contains(fmt::format("\"layout\": \"pairs\", \"bits\": 16 ({})", humanBytes(pairs))) &&
                       Contains(fmt::format("--range minmax_mipmap ({})",
-                                           humanBytes(MinMaxMipmap::layout(1024, 1024, needs).bytes()))));
+                                           humanBytes(MinMaxMipmap::layout(1024, 1024, needs, 16).bytes()))));
   // What the hint offers builds under the same limit.
-  CHECK(make("rmip", {{"resolution", 512}}, d, needs)->bytes() > 0);
-  CHECK(make("minmax_mipmap", json::object(), d, needs)->bytes() > 0);
-  // Compression 0 is offered when it fits: with 80 MiB the budget is 64 MiB.
-  {
-    MemoryLimit more("80M");
-    const std::string m2 = errorOf([&] { make("rmip", json::object(), d, needs); });
-    CHECK_THAT(m2, Contains("\"compression\": 0 (64.0 MiB)") && Contains("\"resolution\": 512"));
-  }
+  CHECK(make("rmip", {{"layout", "corners"}, {"resolution", 512}}, d, needs)->bytes() > 0);
+  CHECK(make("rmip", json::object(), d, needs)->bytes() > 0);
+  CHECK(make("minmax_mipmap", {{"bits", 16}}, d, needs)->bytes() > 0);
   // Safety zones: nine 8 MiB maps + one to build them; five deltas fit.
   const std::string sz = errorOf([&] { make("safety_zones", json::object(), d, needs); });
   INFO(sz);
   CHECK(sz.find('\n') == std::string::npos);
   CHECK_THAT(sz, Contains("safety_zones needs") && Contains("\"deltas\": [1, 2, 4, 8, 16] in") &&
                      Contains("--range minmax_mipmap"));
-  // In 1 MiB only a 64x64-pixel rmip fits.
+  // In 1 MiB (0.8 MiB to use) a 256x256-pixel rmip fits (384 KiB + 128 KiB scratch).
   {
     MemoryLimit tiny("1M");
     const std::string mm = errorOf([&] { make("minmax_mipmap", json::object(), d, needs); });
-    CHECK_THAT(mm, Contains("minmax_mipmap needs") &&
-                       Contains("try --range rmip with \"resolution\": 64, \"compression\": 0"));
-    const std::string rm = errorOf([&] { make("rmip", {{"compression", 0}}, d, needs); });
-    CHECK_THAT(rm, Contains("rmip needs") && !Contains("\"compression\": 0 (") && Contains("try \"resolution\""));
+    CHECK_THAT(mm, Contains("minmax_mipmap needs") && Contains("try --range rmip with \"resolution\": 256"));
+    const std::string rm = errorOf([&] { make("rmip", json::object(), d, needs); });
+    CHECK_THAT(rm, Contains("rmip needs") && !Contains("\"layout\"") && Contains("try \"resolution\": 256"));
   }
 }
 
@@ -300,7 +312,8 @@ TEST_CASE("oblong info and render refuse what does not fit with one line and exi
   const std::string out = (dir / "out.png").string();
   const std::string render = "render " + scene + " --size 8x8 -q -o " + out;
 
-  Run r = runOblong("OBLONG_MEMORY_LIMIT=1M", "info " + scene);
+  // The default rmip of a 256^2 map takes 384 KiB (+ 128 KiB while building): 256K refuses it.
+  Run r = runOblong("OBLONG_MEMORY_LIMIT=256K", "info " + scene);
   INFO(r.err);
   CHECK(r.status == 1);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);

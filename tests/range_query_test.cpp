@@ -100,9 +100,16 @@ std::vector<Config> configsFor(const HeightMap& m) {
   std::vector<Config> c;
   for (const auto& n : rangeQueryNames()) c.push_back({n, json::object()});
   const int big = std::max(m.width(), m.height());
-  for (int res : {0, std::max(1, big / 2), std::max(1, big / 4)})
-    for (int comp : {0, 1, 99}) c.push_back({"rmip", {{"resolution", res}, {"compression", comp}}});
+  for (int res : {0, std::max(1, big / 2), std::max(1, big / 4)}) {
+    for (int bits : {16, 32}) {
+      c.push_back({"rmip", {{"resolution", res}, {"layout", "pairs"}, {"bits", bits}}});
+      for (int comp : {0, 1, 99})
+        c.push_back({"rmip", {{"resolution", res}, {"layout", "corners"}, {"compression", comp}, {"bits", bits}}});
+    }
+  }
   c.push_back({"safety_zones", {{"deltas", {0, 3, 5}}}});
+  c.push_back({"safety_zones", {{"bits", 16}}});
+  c.push_back({"minmax_mipmap", {{"bits", 16}}});
   return c;
 }
 
@@ -186,10 +193,13 @@ TEST_CASE("every range query strategy is conservative, and exact where it claims
   auto map = randomMap(64, 64, 99);
   Displacement disp;
   disp.map = map;
-  ParamSet ps(json{{"compression", 99}}, "test");
+  ParamSet ps(json{{"layout", "corners"}, {"compression", 99}, {"bits", 32}}, "test");
   CHECK(createRangeQuery("rmip", ps, {disp, QueryNeeds::all(*map)})->exact());
-  ParamSet ps2(json{{"resolution", 32}, {"compression", 99}}, "test");
+  ParamSet ps2(json{{"layout", "corners"}, {"resolution", 32}, {"compression", 99}, {"bits", 32}}, "test");
   CHECK_FALSE(createRangeQuery("rmip", ps2, {disp, QueryNeeds::all(*map)})->exact());
+  // 16-bit codes are rounded outward: never exact.
+  ParamSet ps3(json{{"layout", "corners"}, {"compression", 99}, {"bits", 16}}, "test");
+  CHECK_FALSE(createRangeQuery("rmip", ps3, {disp, QueryNeeds::all(*map)})->exact());
   CHECK(checked > 0);
 }
 
@@ -210,11 +220,17 @@ TEST_CASE("range query names and parameters are validated", "[range_query]") {
   CHECK_THROWS_WITH(make("rmip", {{"bogus", 1}}), Catch::Contains("bogus"));
   CHECK_THROWS_WITH(make("minmax_mipmap", {{"bogus", 1}}), Catch::Contains("bogus"));
   CHECK_THROWS_AS(make("rmip", {{"resolution", -1}}), Error);
-  CHECK_THROWS_AS(make("rmip", {{"compression", -1}}), Error);
+  CHECK_THROWS_AS(make("rmip", {{"layout", "corners"}, {"compression", -1}}), Error);
+  CHECK_THROWS_WITH(make("rmip", {{"compression", 1}}), Catch::Contains("'compression'") && Catch::Contains("corners"));
+  CHECK_THROWS_WITH(make("rmip", {{"layout", "tiles"}}), Catch::Contains("'layout'") && Catch::Contains("tiles"));
+  for (const char* n : {"rmip", "minmax_mipmap", "safety_zones"}) {
+    CHECK_THROWS_WITH(make(n, {{"bits", 8}}), Catch::Contains("'bits'") && Catch::Contains("16 or 32"));
+    CHECK_NOTHROW(make(n, {{"bits", 16}}));
+  }
   CHECK_THROWS_AS(make("rmip", {{"resolution", "high"}}), Error);
   CHECK_THROWS_AS(make("safety_zones", {{"deltas", {1, -2}}}), Error);
   CHECK_THROWS_AS(make("safety_zones", {{"deltas", json::array()}}), Error);
-  CHECK_NOTHROW(make("rmip", {{"resolution", 8}, {"compression", 2}}));
+  CHECK_NOTHROW(make("rmip", {{"resolution", 8}, {"layout", "corners"}, {"compression", 2}}));
   // Only lod 0 is defined.
   auto rq = make("rmip", json::object());
   CHECK_THROWS_AS(rq->query(Rect{vec2(0.1f), vec2(0.2f)}, 1.5f), Error);
@@ -240,12 +256,21 @@ TEST_CASE("range queries build only what the scene needs (invariant 4)", "[range
   }
   for (int c : {0, 1, 99}) {
     CAPTURE(c);
-    CHECK(bytesOf("rmip", {{"compression", c}}, small) < bytesOf("rmip", {{"compression", c}}, all));
-    CHECK(bytesOf("rmip", {{"compression", c}}, noWrap) < bytesOf("rmip", {{"compression", c}}, all));
+    const json corners{{"layout", "corners"}, {"compression", c}};
+    CHECK(bytesOf("rmip", corners, small) < bytesOf("rmip", corners, all));
+    CHECK(bytesOf("rmip", corners, noWrap) < bytesOf("rmip", corners, all));
   }
-  // Compression and resolution shrink the structure.
-  CHECK(bytesOf("rmip", {{"compression", 1}}, all) < bytesOf("rmip", {{"compression", 99}}, all));
+  // "pairs" fills the wrapping entries only when asked, but stores as many either way.
+  CHECK(bytesOf("rmip", json::object(), noWrap) == bytesOf("rmip", json::object(), all));
+  // Compression, resolution and 16-bit codes shrink the structure; "pairs" holds about one
+  // entry per pixel (a little over W x H here: the borders' partial blocks).
+  CHECK(bytesOf("rmip", {{"layout", "corners"}, {"compression", 1}}, all) <
+        bytesOf("rmip", {{"layout", "corners"}, {"compression", 99}}, all));
   CHECK(bytesOf("rmip", {{"resolution", 64}}, all) < bytesOf("rmip", json::object(), all));
+  CHECK(bytesOf("rmip", {{"bits", 16}}, all) * 2 <= bytesOf("rmip", {{"bits", 32}}, all) + 4096);
+  CHECK(bytesOf("rmip", json::object(), all) < size_t(256 * 200 * 4) * 11 / 10);
+  CHECK(bytesOf("minmax_mipmap", {{"bits", 16}}, all) < bytesOf("minmax_mipmap", json::object(), all));
+  CHECK(bytesOf("safety_zones", {{"bits", 16}}, all) < bytesOf("safety_zones", json::object(), all));
 
   // QueryNeeds::forRects: extents of the snapped boxes, wrap only when one leaves the map.
   const QueryNeeds inside = QueryNeeds::forRects(disp, {Rect{vec2(0.1f), vec2(0.2f, 0.15f)}});
@@ -256,4 +281,62 @@ TEST_CASE("range queries build only what the scene needs (invariant 4)", "[range
   CHECK(inside.maxExtentY <= 0.05 * 200 + 3);
   CHECK(QueryNeeds::forRects(disp, {Rect{vec2(0.9f, 0.5f), vec2(1.1f, 0.6f)}}).wrap);
   CHECK(QueryNeeds::forRects(disp, {Rect{vec2(0.0f, 0.5f), vec2(0.1f, 0.6f)}}).wrap);  // cell left of texel 0
+}
+
+TEST_CASE("update after an edit equals a full build, bit for bit", "[range_query][update]") {
+  // Every registered strategy with its defaults, and rmip's other layouts and storages;
+  // maps of odd and power-of-two sizes, in [0, 1] (the fixed 16-bit range) and beyond it
+  // (an edit can move the map's range: everything is re-encoded); with and without wrap.
+  std::vector<Config> configs;
+  for (const auto& n : rangeQueryNames()) configs.push_back({n, json::object()});
+  for (const char* n : {"minmax_mipmap", "safety_zones"}) configs.push_back({n, {{"bits", 16}}});
+  configs.push_back({"rmip", {{"bits", 32}}});
+  configs.push_back({"rmip", {{"resolution", 13}}});
+  configs.push_back({"rmip", {{"layout", "corners"}, {"compression", 0}}});
+  int compared = 0;
+  for (auto [W, H] : std::vector<std::pair<int, int>>{{1, 1}, {5, 3}, {64, 64}, {37, 70}})
+    for (bool unit : {true, false})
+      for (bool wrap : {false, true}) {
+        std::mt19937 rng(uint32_t(W * 131 + H * 7 + unit * 3 + wrap));
+        std::uniform_real_distribution<float> value(unit ? 0.0f : -2.0f, unit ? 1.0f : 3.0f);
+        std::vector<float> t(size_t(W) * H);
+        for (float& v : t) v = value(rng);
+        auto map = std::make_shared<HeightMap>(W, H, t, "edited");
+        Displacement disp;
+        disp.map = map;
+        QueryNeeds needs = QueryNeeds::all(*map);
+        needs.wrap = wrap;
+        for (const Config& c : configs) {
+          if (!c.params.empty() && c.name != "rmip" && !c.params.contains("bits")) continue;
+          ParamSet ps(c.params, "test");
+          auto rq = createRangeQuery(c.name, ps, {disp, needs});
+          for (int edit = 0; edit < 12; ++edit) {
+            // A brush: a rectangle anywhere, crossing the border when it likes, up to the map.
+            std::uniform_int_distribution<int> x(-W, 2 * W), y(-H, 2 * H), ew(1, std::max(1, W / 2)),
+                eh(1, std::max(1, H / 2));
+            const SampleRange r{x(rng), y(rng), 0, 0};
+            const SampleRange e{r.x0, r.y0, r.x0 + (edit == 11 ? W : ew(rng)) - 1, r.y0 + (edit == 11 ? H : eh(rng)) - 1};
+            std::uniform_real_distribution<float> brush(unit ? 0.0f : -2.5f, unit ? 1.0f : 3.5f);
+            for (int j = e.y0; j <= e.y1; ++j)
+              for (int i = e.x0; i <= e.x1; ++i) map->set(i, j, brush(rng));
+            rq->update(e);
+            ParamSet ps2(c.params, "test");
+            const auto fresh = createRangeQuery(c.name, ps2, {disp, needs});
+            INFO(c.name << " " << c.params.dump() << " " << W << "x" << H << " unit " << unit << " wrap " << wrap
+                        << " edit " << edit << " [" << e.x0 << "," << e.x1 << "]x[" << e.y0 << "," << e.y1 << "]");
+            const auto a = rq->storage(), b = fresh->storage();
+            REQUIRE(a.size() == b.size());
+            REQUIRE(std::equal(a.begin(), a.end(), b.begin()));
+            // And the updated structure still bounds every range it is asked.
+            std::uniform_int_distribution<int> qx(-W, 2 * W), qy(-H, 2 * H), qe(0, std::max(W, H) + 1);
+            for (int k = 0; k < 30; ++k) {
+              const int x0 = qx(rng), y0 = qy(rng);
+              const SampleRange q{x0, y0, x0 + qe(rng) % (W + 1), y0 + qe(rng) % (H + 1)};
+              REQUIRE(rq->rawRange(q).contains(bruteForceRange(*map, q)));
+            }
+            ++compared;
+          }
+        }
+      }
+  CHECK(compared > 500);
 }

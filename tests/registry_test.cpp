@@ -25,13 +25,12 @@ namespace {
 // RangeQuery "global": the whole map's [min, max] for every range (conservative, loose).
 class Global final : public RangeQueryImpl<Global> {
  public:
-  Global(const Displacement& d, const QueryNeeds& n) : RangeQueryImpl(d, n) {
-    for (int j = 0; j < map().height(); ++j)
-      for (int i = 0; i < map().width(); ++i) all_.extend(map().atUnchecked(i, j));
-  }
+  Global(const Displacement& d, const QueryNeeds& n) : RangeQueryImpl(d, n) { all_ = map().range(); }
   std::string_view name() const override { return "global"; }
   size_t bytes() const override { return sizeof(all_); }
   bool exact() const override { return false; }
+  void update(const SampleRange&) override { all_ = map().range(); }
+  std::span<const std::byte> storage() const override { return std::as_bytes(std::span(&all_, 1)); }
   Interval rawRangeFast(const SampleRange&) const { return all_; }
 
  private:

@@ -189,7 +189,8 @@ std::vector<ConformanceConfig> conformanceConfigs() {
   variant([](TraversalConfig& c) {  // the RMIP driver with TFDM's mipmap and quad-tree splits
     c.range = "minmax_mipmap", c.splitter = "quadtree", c.inversionInTraversal = false, c.marchingScale = 1.0f;
   });
-  variant([](TraversalConfig& c) { c.rangeParams = {{"resolution", 8}, {"compression", 0}}; });
+  variant([](TraversalConfig& c) { c.rangeParams = {{"resolution", 8}, {"layout", "corners"}, {"compression", 0}}; });
+  variant([](TraversalConfig& c) { c.rangeParams = {{"resolution", 8}, {"bits", 32}}; });
   // Every registered baseline that claims exactness (tfdm, ...), the oracle aside.
   for (const std::string& b : exactBaselines()) variant([&b](TraversalConfig& c) { c.baseline = b; });
   variant([](TraversalConfig& c) {  // tfdm with world-space node boxes (its default: texture frame)

@@ -149,16 +149,23 @@ TEST_CASE("vulkan: the GPU's RMIP layout answers every query as Rmip", "[vulkan]
   for (const char* name : {"asteroid.json", "quad_tiled.json"}) {
     const Scene s = loadScene(scenePath(name));
     const Displacement& d = *s.meshes[0].displacement;
-    // All compressions on the small map; the default one on the 1024² map (its full
-    // pyramid takes a second to build).
-    const std::vector<int> compressions = d.map->width() > 512 ? std::vector<int>{1} : std::vector<int>{0, 1, 3};
+    // Both layouts and storages; all compressions of "corners" on the small map, the
+    // default one on the 1024² map (its full pyramid takes a second to build).
+    std::vector<Rmip::Options> options;
+    for (int bits : {16, 32}) {
+      options.push_back({.layout = Rmip::Scheme::Pairs, .bits = bits});
+      options.push_back({.resolution = 100, .layout = Rmip::Scheme::Pairs, .bits = bits});
+      for (int c : d.map->width() > 512 ? std::vector<int>{1} : std::vector<int>{0, 1, 3})
+        options.push_back({.compression = c, .layout = Rmip::Scheme::Corners, .bits = bits});
+    }
     for (bool wrap : {false, true})
-      for (int compression : compressions) {
+      for (const Rmip::Options& o : options) {
         QueryNeeds needs = QueryNeeds::all(*d.map);
         needs.wrap = wrap;
-        const Rmip rq(d, needs, Rmip::Options{0, compression});
+        const Rmip rq(d, needs, o);
+        const std::string compression = rq.describe().at("layout").dump();
         const vk::RmipLayout L = vk::RmipLayout::of(rq);
-        REQUIRE(L.data.size() == rq.layerEntries().size());
+        REQUIRE(L.words.size() == rq.words().size());
         std::mt19937 rng(7);
         const int W = d.map->width(), H = d.map->height();
         std::uniform_int_distribution<int> x(-W, 2 * W), y(-H, 2 * H), ex(0, W + 2), ey(0, H + 2);

@@ -34,7 +34,7 @@ HYPOTHESIS = ("Issues 3–4 and DESIGN invariant 1: every exact configuration re
               "100× displacement, far from the origin, high tiling, rotated and mirrored uvs).")
 
 # Exact configurations: (label, scene variant, flags). "lowres" = the scene with
-# rmip resolution 8, compression 0 (as in the tests); the others use the default scene.
+# rmip resolution 8, layout corners, compression 0 (as in the tests); the others use the default scene.
 # Besides these, every registered strategy swapped into the canonical configuration
 # (configs(): read from the binary's registry).
 SHAPES = [
@@ -264,7 +264,7 @@ def write_case(ctx, case):
         mesh = {"file": str(obj), "displacement": disp}
     doc = {"meshes": [mesh]}
     base = ctx.write_scene(f"stiff_{case.name}", doc)
-    low = dict(doc, strategies={"range": {"name": "rmip", "resolution": 8, "compression": 0}})
+    low = dict(doc, strategies={"range": {"name": "rmip", "resolution": 8, "layout": "corners", "compression": 0}})
     lowp = ctx.write_scene(f"stiff_{case.name}_lowres", low)
     return {"": base, "lowres": lowp}
 

@@ -26,16 +26,18 @@ RmipLayout RmipLayout::of(const Rmip& rmip) {
   L.P = rmip.layersX() - 1;
   L.Q = rmip.layersY() - 1;
   L.wrap = rmip.storesWrap();
+  L.p0 = rmip.firstLayer();
+  L.bits = rmip.bits();
+  L.q = rmip.quantizer();
   const std::vector<Rmip::Layer>& table = rmip.layerTable();
   if (table.size() != size_t(L.P + 1) * size_t(L.Q + 1))
     fail("--device vulkan", "internal: rmip layer table has {} layers, expected {}x{}", table.size(), L.P + 1, L.Q + 1);
-  const std::vector<Interval>& entries = rmip.layerEntries();
-  if (entries.size() > size_t(INT32_MAX))
-    fail("--device vulkan", "rmip: {} entries exceed the 32-bit layer offsets of the GPU layout", entries.size());
+  const std::span<const uint32_t> words = rmip.words();
+  if (words.size() > size_t(INT32_MAX))
+    fail("--device vulkan", "rmip: {} words exceed the 32-bit offsets of the GPU layout", words.size());
   L.layers.reserve(table.size());
   for (const Rmip::Layer& l : table) L.layers.emplace_back(int(l.offset), l.nx, l.shiftX, l.shiftY);
-  L.data.reserve(entries.size());
-  for (const Interval& e : entries) L.data.emplace_back(e.lo, e.hi);
+  L.words.assign(words.begin(), words.end());
   return L;
 }
 
@@ -47,20 +49,28 @@ Interval RmipLayout::rawRange(const HeightMap& m, const SampleRange& r) const {
     s /= f;
     if (e - s + 1 >= n) s = 0, e = n - 1;
   };
+  // traversal.glsl rmipEntry: decodes each entry (the CPU joins codes and decodes once;
+  // the decode is monotone, so both give the same interval).
+  auto entry = [&](size_t idx) {
+    if (bits == 16) {
+      const uint32_t w = words[idx];
+      return Interval{q.decode(w & 0xffffu), q.decode(w >> 16)};
+    }
+    return Interval{std::bit_cast<float>(words[2 * idx]), std::bit_cast<float>(words[2 * idx + 1])};
+  };
   auto block = [&](int x0, int x1, int y0, int y1) {
-    const int p = std::min(log2floor(x1 - x0 + 1), P), q = std::min(log2floor(y1 - y0 + 1), Q);
+    const int p = std::clamp(log2floor(x1 - x0 + 1), p0, P), q = std::clamp(log2floor(y1 - y0 + 1), p0, Q);
     const glm::ivec4 L = layers[size_t(p) * (Q + 1) + q];
     const int lx = 1 << p, ly = 1 << q;
     Interval out;
     for (int cy = y0;; cy += ly) {
       const bool lastY = cy + ly - 1 >= y1;
-      if (lastY) cy = y1 - ly + 1;
+      if (lastY) cy = std::max(y1 - ly + 1, y0);
       const size_t row = size_t((cy >= rh ? cy - rh : cy) >> L.w) * L.y;
       for (int cx = x0;; cx += lx) {
         const bool lastX = cx + lx - 1 >= x1;
-        if (lastX) cx = x1 - lx + 1;
-        const glm::vec2 v = data[L.x + row + ((cx >= rw ? cx - rw : cx) >> L.z)];
-        out.extend(Interval{v.x, v.y});
+        if (lastX) cx = std::max(x1 - lx + 1, x0);
+        out.extend(entry(L.x + row + ((cx >= rw ? cx - rw : cx) >> L.z)));
         if (lastX) break;
       }
       if (lastY) break;

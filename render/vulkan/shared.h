@@ -106,8 +106,10 @@ struct MeshGpu {
   int W, H;         // map size
   float scale, bias;
   vec2 tiling;
-  uint rmipData, rmipLayers;  // offsets into the RMIP buffers
+  uint rmipData, rmipLayers;  // offsets into the RMIP buffers (data: 32-bit words)
   int rmipF, rmipW, rmipH, rmipP, rmipQ, rmipWrap;  // Rmip: downsample, pixels, top layers, wrap stored
+  int rmipBits, rmipFirst;     // Rmip::bits() (16: one word per entry, 32: two), firstLayer()
+  float rmipBase, rmipStep;    // Rmip::quantizer() (bits 16)
   float marchingScale;
   int inversionInTraversal;  // TraversalConfig::inversionInTraversal
   int displaced;

@@ -30,7 +30,7 @@ using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 32 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1112 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 88 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 104 && sizeof(PushGpu) == 16);
 static_assert(sizeof(Ray) == 32 && offsetof(Ray, d) == offsetof(RayGpu, d) && offsetof(Ray, tmin) == offsetof(RayGpu, tmin) &&
                   offsetof(Ray, tmax) == offsetof(RayGpu, tmax),
               "RayGpu mirrors oblong::Ray: ray buffers are copied as is");
@@ -593,7 +593,7 @@ VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
   std::vector<TriGpu> tris;
   std::vector<MeshGpu> meshes(scene.meshes.size());
   std::vector<float> texels;
-  std::vector<glm::vec2> rmipData;
+  std::vector<uint32_t> rmipData;
   std::vector<glm::ivec4> rmipLayers;
   std::vector<uint32_t> plainIndex;
   std::vector<glm::vec2> plainUV;
@@ -637,7 +637,8 @@ VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
     m.rmipData = uint32_t(rmipData.size());
     m.rmipLayers = uint32_t(rmipLayers.size());
     m.rmipF = L.f, m.rmipW = L.rw, m.rmipH = L.rh, m.rmipP = L.P, m.rmipQ = L.Q, m.rmipWrap = L.wrap;
-    rmipData.insert(rmipData.end(), L.data.begin(), L.data.end());
+    m.rmipBits = L.bits, m.rmipFirst = L.p0, m.rmipBase = L.q.base, m.rmipStep = L.q.step;
+    rmipData.insert(rmipData.end(), L.words.begin(), L.words.end());
     rmipLayers.insert(rmipLayers.end(), L.layers.begin(), L.layers.end());
     rmipBytes += L.bytes();
     texels.insert(texels.end(), d.map->texels().begin(), d.map->texels().end());
@@ -669,7 +670,7 @@ VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
   };
   fits(tris.size() * sizeof(TriGpu), "displaced triangles");
   fits(texels.size() * sizeof(float), "height maps");
-  fits(rmipData.size() * sizeof(glm::vec2), "RMIP layers");
+  fits(rmipData.size() * sizeof(uint32_t), "RMIP layers");
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   const VkBufferUsageFlags asInput = VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR;
   D.data[OBLONG_BIND_TRIANGLES] = D.upload(tris, ssbo);

@@ -13,7 +13,7 @@ layout(set = 0, binding = OBLONG_BIND_COUNTERS, scalar) buffer Counters { Counte
 layout(set = 0, binding = OBLONG_BIND_TRIANGLES, scalar) readonly buffer Tris { TriGpu tris[]; };
 layout(set = 0, binding = OBLONG_BIND_MESHES, scalar) readonly buffer Meshes { MeshGpu meshes[]; };
 layout(set = 0, binding = OBLONG_BIND_TEXELS, scalar) readonly buffer Texels { float texels[]; };
-layout(set = 0, binding = OBLONG_BIND_RMIP_DATA, scalar) readonly buffer RmipData { vec2 rmipData[]; };
+layout(set = 0, binding = OBLONG_BIND_RMIP_DATA, scalar) readonly buffer RmipData { uint rmipWords[]; };
 layout(set = 0, binding = OBLONG_BIND_RMIP_LAYERS, scalar) readonly buffer RmipLayers { ivec4 rmipLayers[]; };
 layout(set = 0, binding = OBLONG_BIND_PLAIN_INDEX, scalar) readonly buffer PlainIndex { uint plainIndex[]; };
 layout(set = 0, binding = OBLONG_BIND_PLAIN_UV, scalar) readonly buffer PlainUV { vec2 plainUV[]; };

@@ -97,21 +97,36 @@ void toPixels(int a0, int a1, int size, int n, out int s, out int e) {
     e = n - 1;
   }
 }
+// Quantizer16::decode, unfused as on the CPU.
+float rmipDecode(uint code) {
+  precise float scaled = float(code) * g_mesh.rmipStep;
+  precise float v = g_mesh.rmipBase + scaled;
+  return v;
+}
+// Entry idx of the mesh's layers (bits 16: one word of codes; bits 32: two float words).
+vec2 rmipEntry(uint idx) {
+  if (g_mesh.rmipBits == 16) {
+    uint w = rmipWords[g_mesh.rmipData + idx];
+    return vec2(rmipDecode(w & 0xffffu), rmipDecode(w >> 16));
+  }
+  uint at = g_mesh.rmipData + 2u * idx;
+  return vec2(uintBitsToFloat(rmipWords[at]), uintBitsToFloat(rmipWords[at + 1u]));
+}
 vec2 rmipBlock(int x0, int x1, int y0, int y1) {
-  int p = min(findMSB(x1 - x0 + 1), g_mesh.rmipP), q = min(findMSB(y1 - y0 + 1), g_mesh.rmipQ);
+  int p = clamp(findMSB(x1 - x0 + 1), g_mesh.rmipFirst, g_mesh.rmipP);
+  int q = clamp(findMSB(y1 - y0 + 1), g_mesh.rmipFirst, g_mesh.rmipQ);
   ivec4 L = rmipLayers[g_mesh.rmipLayers + uint(p * (g_mesh.rmipQ + 1) + q)];  // offset, nx, shiftX, shiftY
   int lx = 1 << p, ly = 1 << q;
   int rw = g_mesh.rmipW, rh = g_mesh.rmipH;
-  uint base = g_mesh.rmipData + uint(L.x);
   vec2 r = vec2(kInfF, -kInfF);
   for (int cy = y0;; cy += ly) {
     bool lastY = cy + ly - 1 >= y1;
-    if (lastY) cy = y1 - ly + 1;
+    if (lastY) cy = max(y1 - ly + 1, y0);
     uint row = uint((cy >= rh ? cy - rh : cy) >> L.w) * uint(L.y);
     for (int cx = x0;; cx += lx) {
       bool lastX = cx + lx - 1 >= x1;
-      if (lastX) cx = x1 - lx + 1;
-      vec2 v = rmipData[base + row + uint((cx >= rw ? cx - rw : cx) >> L.z)];
+      if (lastX) cx = max(x1 - lx + 1, x0);
+      vec2 v = rmipEntry(uint(L.x) + row + uint((cx >= rw ? cx - rw : cx) >> L.z));
       r.x = v.x < r.x ? v.x : r.x;
       r.y = r.y < v.y ? v.y : r.y;
       if (lastX) break;
