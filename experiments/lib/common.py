@@ -602,7 +602,7 @@ def main(module) -> int:
               + "; ".join(runstore.describe_shard(x) for x in sorted(p.shards)), flush=True)
         return 75
     except runstore.ShardDone:
-        print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} runs executed and stored on "
+        print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} run(s) executed and stored on "
               f"{STORE.node['host']}", flush=True)
         return 0
     except Exception as e:  # noqa: BLE001 - reported in the summary and the exit status
@@ -647,9 +647,10 @@ def main(module) -> int:
     summary["started_utc"] = record["started_utc"]
     if STORE is not None:
         if STORE.mode == "worker":
-            print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} runs executed and stored "
-                  f"on {STORE.node['host']}", flush=True)
-            return 0
+            print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} run(s) executed and stored "
+                  f"on {STORE.node['host']}; {status}", flush=True)
+            # A run that failed here fails the job, so that run_all reports it with this log.
+            return 1 if status == "failed" else 0
         # Every run came from the store: where and in which Slurm job each ran.
         nodes = {u["host"]: u["cpu"] for u in STORE.used}
         record["backend"] = {"name": "slurm", "store": str(STORE.root), "nodes": nodes, "runs": STORE.used}

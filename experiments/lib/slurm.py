@@ -64,8 +64,6 @@ def task_states(job: str) -> dict:
                         st[t] = {"state": f[1].split()[0], "exit": f[2], "node": f[3], "reason": ""}
     except (OSError, subprocess.TimeoutExpired):
         pass
-    if st:
-        return st
     try:
         p = _run(["scontrol", "show", "job", "-o", job])
     except (OSError, subprocess.TimeoutExpired):
@@ -75,6 +73,8 @@ def task_states(job: str) -> dict:
         if "ArrayTaskId" not in kv:
             continue
         for t in expand_tasks(kv["ArrayTaskId"]):
+            if t in st:
+                continue  # sacct said it
             st[t] = {"state": kv.get("JobState", "?"), "exit": kv.get("ExitCode", "?"),
                      "node": kv.get("NodeList", ""), "reason": kv.get("Reason", "")}
     return st
@@ -232,7 +232,8 @@ exit "$rc"
                         self.plan(e)
                         if e.status is not None:
                             self.log(f"{e.name}: {e.status} after {e.passes} pass{'es' if e.passes > 1 else ''}, "
-                                     f"{e.submitted} Slurm tasks, {time.time() - e.started:.0f} s")
+                                     f"{e.submitted} Slurm task{'' if e.submitted == 1 else 's'}, "
+                                     f"{time.time() - e.started:.0f} s")
                 waiting = [e for e in exps if e.job is not None]
                 if not waiting:
                     if all(e.status is not None for e in exps):
