@@ -16,10 +16,15 @@ PY=/usr/bin/python3
 ONLY=steps,ablation_splitter
 CANCEL=ablation_splitter  # the experiment whose job is cancelled on purpose
 SKIP=77
+LIMIT=180  # seconds for the whole test; CTest's TIMEOUT is only a backstop above it
 T0=$(date +%s)
 
 say() { echo "slurm_test: $*"; }
 fail() { echo "slurm_test: FAIL: $*" >&2; exit 1; }
+left() { local n=$(( T0 + LIMIT - $(date +%s) )); [ "$n" -gt 0 ] && echo "$n" || echo 1; }
+# Runs a command in the background and waits for it: a signal then reaches the traps at
+# once instead of after the command.
+bg() { "$@" & RUN_PID=$!; local rc=0; wait "$RUN_PID" || rc=$?; RUN_PID=""; return "$rc"; }
 
 if grep -qs '^OBLONG_SANITIZE:BOOL=ON' "$BUILD/CMakeCache.txt"; then
   # This checks run_all's Slurm backend, not oblong: the Release build's run covers it,
@@ -34,35 +39,38 @@ done
 
 # 0711: munged wants every directory above its socket searchable by all; the key's own
 # folder stays private.
-T="$(mktemp -d /tmp/oblong-slurm-test.XXXXXX)"
+T="$(mktemp -d "${TMPDIR:-/tmp}/oblong-slurm-test.XXXXXX")"
 chmod 711 "$T"
 mkdir -m 700 "$T/munge"
 mkdir -m 755 "$T/sock" "$T/state" "$T/spool" "$T/log"
 export SLURM_CONF="$T/slurm.conf"
 
-stop_pid() {  # stop_pid PIDFILE: TERM, up to 10 s, then KILL
-  local f="$1" pid
-  [ -s "$f" ] || return 0
-  pid="$(cat "$f")"
+# The daemons run in the foreground as this script's children: a test runner that kills
+# the process group on a timeout stops them too.
+stop_pid() {  # stop_pid PID: TERM, up to 10 s, then KILL
+  local pid="$1"
+  [ -n "$pid" ] || return 0
   kill "$pid" 2>/dev/null || return 0
   for _ in $(seq 1 100); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.1; done
   kill -9 "$pid" 2>/dev/null || true
 }
+exec 3>&1 4>&2  # the test's own output, for the cleanup that may run inside a redirection
 cleanup() {
   local rc=$?
   set +e
+  exec 1>&3 2>&4
   [ -n "${RUN_PID:-}" ] && kill "$RUN_PID" 2>/dev/null
   [ -n "${WATCH_PID:-}" ] && kill "$WATCH_PID" 2>/dev/null
-  if [ -s "$T/slurmctld.pid" ]; then
+  if [ -n "${CTLD_PID:-}" ]; then
     scancel --quiet --user="$(id -un)" 2>/dev/null
     for _ in $(seq 1 50); do [ -z "$(squeue -h -o %i 2>/dev/null)" ] && break; sleep 0.2; done
   fi
   if [ "$rc" != 0 ] && [ "$rc" != "$SKIP" ]; then
     for f in "$T"/log/*.log; do [ -f "$f" ] && { echo "--- $f (last lines)"; tail -n 15 "$f"; }; done
   fi
-  stop_pid "$T/slurmd.pid"
-  stop_pid "$T/slurmctld.pid"
-  stop_pid "$T/munge/munged.pid"
+  stop_pid "${SLURMD_PID:-}"
+  stop_pid "${CTLD_PID:-}"
+  stop_pid "${MUNGED_PID:-}"
   rm -rf "$T"
   say "finished in $(( $(date +%s) - T0 )) s (exit $rc)"
 }
@@ -81,8 +89,11 @@ USER_NAME="$(id -un)"
 
 head -c 1024 /dev/urandom > "$T/munge/munge.key"
 chmod 400 "$T/munge/munge.key"
-munged --socket="$T/sock/munge.sock" --key-file="$T/munge/munge.key" --pid-file="$T/munge/munged.pid" \
-  --log-file="$T/log/munged.log" --seed-file="$T/munge/munged.seed"
+munged -F --socket="$T/sock/munge.sock" --key-file="$T/munge/munge.key" --pid-file="$T/munge/munged.pid" \
+  --log-file="$T/log/munged.log" --seed-file="$T/munge/munged.seed" > "$T/log/munged.out.log" 2>&1 &
+MUNGED_PID=$!
+for _ in $(seq 1 50); do [ -S "$T/sock/munge.sock" ] && break; sleep 0.1; done
+[ -S "$T/sock/munge.sock" ] || fail "munged did not start"
 
 cat > "$SLURM_CONF" <<EOF
 # Written by tests/slurm_test.sh: one node, this machine, 127.0.0.1 only.
@@ -118,8 +129,10 @@ NodeName=$HOST NodeAddr=127.0.0.1 CPUs=$NCPU State=UNKNOWN
 PartitionName=oblongtest Nodes=$HOST Default=YES MaxTime=INFINITE State=UP
 EOF
 
-slurmctld -f "$SLURM_CONF"
-slurmd -f "$SLURM_CONF"
+slurmctld -D -f "$SLURM_CONF" > "$T/log/slurmctld.out.log" 2>&1 &
+CTLD_PID=$!
+slurmd -D -f "$SLURM_CONF" > "$T/log/slurmd.out.log" 2>&1 &
+SLURMD_PID=$!
 up=""
 for _ in $(seq 1 150); do
   st="$(sinfo -h -o %T 2>/dev/null || true)"
@@ -133,7 +146,8 @@ RUN_ALL=("$PY" "$ROOT/experiments/run_all" --quick --build "$BUILD" --only "$ONL
 
 # 1. The reference: the same subset run locally.
 t=$(date +%s)
-"${RUN_ALL[@]}" --out "$T/local" > "$T/local.log" 2>&1 || { cat "$T/local.log"; fail "local run failed"; }
+bg timeout "$(left)" "${RUN_ALL[@]}" --out "$T/local" > "$T/local.log" 2>&1 ||
+  { cat "$T/local.log"; fail "local run failed"; }
 say "local run: $(( $(date +%s) - t )) s"
 
 # 2. Through Slurm, every array submitted held: the watcher cancels the one of $CANCEL
@@ -158,8 +172,8 @@ RUN_PID=$!
 ) &
 WATCH_PID=$!
 rc=0
-for _ in $(seq 1 900); do kill -0 "$RUN_PID" 2>/dev/null || break; sleep 0.2; done
-kill -0 "$RUN_PID" 2>/dev/null && { cat "$T/run1.log"; fail "run_all --backend slurm still running after 180 s"; }
+while kill -0 "$RUN_PID" 2>/dev/null && [ "$(( $(date +%s) - T0 ))" -lt "$LIMIT" ]; do sleep 0.2; done
+kill -0 "$RUN_PID" 2>/dev/null && { cat "$T/run1.log"; fail "run_all --backend slurm still running at $LIMIT s"; }
 wait "$RUN_PID" || rc=$?
 RUN_PID=""
 wait "$WATCH_PID" || true
@@ -180,7 +194,8 @@ find "$T/store/runs" -name result.json -printf '%P %T@\n' | sort > "$T/stored1"
 
 # 3. The rerun: only the cancelled work is submitted; the stored runs are used as they are.
 t=$(date +%s)
-"${RUN_ALL[@]}" "${SLURM_ARGS[@]}" > "$T/run2.log" 2>&1 || { cat "$T/run2.log"; fail "the rerun failed"; }
+bg timeout "$(left)" "${RUN_ALL[@]}" "${SLURM_ARGS[@]}" > "$T/run2.log" 2>&1 ||
+  { cat "$T/run2.log"; fail "the rerun failed"; }
 say "rerun: $(( $(date +%s) - t )) s"
 grep "^run_all: " "$T/run2.log" | sed 's/^/slurm_test:   /'
 n_sub="$(grep -c "submitted job array" "$T/run2.log" || true)"
@@ -229,5 +244,5 @@ EOF
 grep -q "Slurm" "$T/slurm/REPORT.md" || fail "REPORT.md does not say the runs ran on Slurm"
 
 elapsed=$(( $(date +%s) - T0 ))
-[ "$elapsed" -le 180 ] || fail "took $elapsed s (budget 180 s)"
+[ "$elapsed" -le "$LIMIT" ] || fail "took $elapsed s (budget $LIMIT s)"
 say "PASS"

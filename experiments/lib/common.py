@@ -31,6 +31,7 @@ import platform
 import random
 import re
 import shutil
+import signal
 import statistics
 import subprocess
 import sys
@@ -567,6 +568,9 @@ def main(module) -> int:
     ap.add_argument("--plan-file", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--since", type=float, default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
+    # A SIGTERM (a killed run_all, a cancelled Slurm job) unwinds like an error: the scratch
+    # folder is removed.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     global STORE
     if a.store:
         STORE = runstore.Store(a.store, a.store_pass, a.shard, a.session)

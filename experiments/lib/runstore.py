@@ -190,6 +190,9 @@ class Store:
         except C.ExperimentError as e:
             rec.update({"ok": False, "error": str(e)})
             r = None
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)  # cancelled: nothing half-written stays
+            raise
         if r is not None:
             outs = {}
             prev = None
