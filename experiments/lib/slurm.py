@@ -50,8 +50,9 @@ def expand_tasks(spec: str) -> list:
 
 def task_states(job: str) -> dict:
     """{task: {"state", "exit", "node", "reason"}} for an ended array: from sacct when
-    accounting is on, else from scontrol (the controller keeps ended jobs MinJobAge
-    seconds; a task cancelled before it started may have no record at all)."""
+    accounting is on, and from scontrol for the tasks sacct does not know (the controller
+    keeps ended jobs MinJobAge seconds; a task of a larger array cancelled before it
+    started may have no record at all)."""
     st = {}
     try:
         p = _run(["sacct", "-j", job, "-n", "-P", "-X", "-o", "JobID,State,ExitCode,NodeList"])
