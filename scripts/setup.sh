@@ -21,6 +21,11 @@ PKGS=(
 # Mesa >= 24.1) only from bookworm-backports, so the suite is added and the driver is
 # pinned to it below.
 PKGS+=(libvulkan-dev glslc spirv-tools vulkan-tools)
+
+# experiments/run_all --backend slurm and its test (tests/slurm_test.sh), which starts a
+# single-node Slurm of its own: the controller, the node daemon, the client commands
+# (sbatch, squeue, scancel, scontrol, sacct) and MUNGE for their authentication.
+PKGS+=(slurmctld slurmd slurm-client munge)
 BACKPORTS=/etc/apt/sources.list.d/bookworm-backports.list
 if [ ! -s "$BACKPORTS" ]; then
   echo "deb http://deb.debian.org/debian bookworm-backports main" | $SUDO tee "$BACKPORTS" >/dev/null

@@ -31,6 +31,7 @@ import platform
 import random
 import re
 import shutil
+import signal
 import statistics
 import subprocess
 import sys
@@ -39,6 +40,8 @@ import threading
 import time
 import traceback
 from pathlib import Path
+
+import runstore
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = ROOT / "experiments"
@@ -206,6 +209,7 @@ class Context:
         self.threads = threads
         self.runs = 0
         self.scenes: dict[str, dict] = {}  # variant name -> the JSON written (recorded in run.json)
+        self.variant_base: dict[str, str] = {}  # variant file -> the scene it varies (Slurm shards)
         self.configs: dict[str, dict] = {}  # label -> flags and the resolved config from the stats
         self.start = time.time()
         self.load_start = os.getloadavg()
@@ -247,7 +251,9 @@ class Context:
                     m["displacement"].update(displacement)
         if image:
             doc["image"] = image
-        return self.write_scene(name, doc)
+        p = self.write_scene(name, doc)
+        self.variant_base[str(p.resolve())] = base
+        return p
 
     def record_config(self, label: str, run: "Run") -> None:
         c = self.configs.setdefault(label, {"command": run.cmd_str(), "scene": run.scene,
@@ -297,10 +303,22 @@ def strategy_names(ctx: Context, kind: str) -> list:
     return [default] + [n for n in names if n != default]
 
 
+# The run store (lib/runstore.py) when `run_all --backend slurm` runs this experiment in
+# passes; None in a local run, which runs every `oblong` here and now.
+STORE = None
+
+
 def run_oblong(ctx: Context, sub: str, scene, args: list, label: str | None = None, timeout: float = 600,
                threads: int | None = None) -> Run:
     """Runs `oblong SUB SCENE ARGS --threads 1 --stats TMP.json`; returns the parsed stats,
     the process's wall time and CPU time (user + system, from wait4)."""
+    if STORE is not None:
+        return STORE.run(ctx, sub, scene, args, label, timeout, threads)
+    return _run_oblong_here(ctx, sub, scene, args, label, timeout, threads)
+
+
+def _run_oblong_here(ctx: Context, sub: str, scene, args: list, label: str | None, timeout: float,
+                     threads: int | None) -> Run:
     fd, stats_path = tempfile.mkstemp(suffix=".json", dir=ctx.scratch)
     os.close(fd)
     th = ctx.threads if threads is None else threads
@@ -344,6 +362,8 @@ def interleaved(ctx: Context, jobs: list, reps: int, seed: int = 1) -> dict:
     """jobs: (key, sub, scene, args) tuples. Runs `reps` rounds; each round runs every job
     once, in a fresh random order (seeded), so that slow drifts of the machine's load hit
     all configurations alike. Returns {key: [Run per round]} (rounds in order)."""
+    if STORE is not None:
+        return STORE.interleaved(ctx, jobs, reps, seed)
     out = {j[0]: [] for j in jobs}
     rng = random.Random(seed)
     for rep in range(reps):
@@ -540,7 +560,20 @@ def main(module) -> int:
     ap.add_argument("--out", default=None, help="output folder (default: experiments/NAME in a full run)")
     ap.add_argument("--scratch", default=None, help="folder for temporary files (default: a temporary folder)")
     ap.add_argument("--reps", type=int, default=None, help="override the number of interleaved rounds")
+    # Used by `run_all --backend slurm` (lib/runstore.py, lib/slurm.py), not by hand.
+    ap.add_argument("--store", default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--store-pass", choices=["plan", "worker"], default="plan", help=argparse.SUPPRESS)
+    ap.add_argument("--shard", default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--session", default="", help=argparse.SUPPRESS)
+    ap.add_argument("--plan-file", default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--since", type=float, default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
+    # A SIGTERM (a killed run_all, a cancelled Slurm job) unwinds like an error: the scratch
+    # folder is removed.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
+    global STORE
+    if a.store:
+        STORE = runstore.Store(a.store, a.store_pass, a.shard, a.session)
     binary = Path(a.build) / "oblong"
     if not binary.exists():
         print(f"{module.NAME}: {binary} not found (build it, or run experiments/run_all)", file=sys.stderr)
@@ -557,10 +590,25 @@ def main(module) -> int:
     keep = a.scratch is not None
     ctx = Context(module.NAME, binary, out, scratch, a.quick, a.reps)
     started = datetime.datetime.now(datetime.timezone.utc)
+    if STORE is not None and a.since:
+        # Across passes and Slurm jobs: from the first pass on.
+        ctx.start = a.since
+        started = datetime.datetime.fromtimestamp(a.since, datetime.timezone.utc)
     status, summary = "ok", None
     try:
         summary = module.run(ctx)
         status = summary.get("status", "ok")
+    except runstore.Pending as p:
+        if a.plan_file:
+            Path(a.plan_file).write_text(json.dumps({"pending": sorted(p.shards), "stored": STORE.reused,
+                                                     "missing": STORE.missing}))
+        print(f"[{module.NAME}] plan: {STORE.reused} runs stored, {STORE.missing} missing so far; to run: "
+              + "; ".join(runstore.describe_shard(x) for x in sorted(p.shards)), flush=True)
+        return 75
+    except runstore.ShardDone:
+        print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} run(s) executed and stored on "
+              f"{STORE.node['host']}", flush=True)
+        return 0
     except Exception as e:  # noqa: BLE001 - reported in the summary and the exit status
         traceback.print_exc()
         status = "failed"
@@ -601,6 +649,16 @@ def main(module) -> int:
     summary["build"] = record["build"]
     summary["load_average"] = [record["load_average_start"], record["load_average_end"]]
     summary["started_utc"] = record["started_utc"]
+    if STORE is not None:
+        if STORE.mode == "worker":
+            print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} run(s) executed and stored "
+                  f"on {STORE.node['host']}; {status}", flush=True)
+            # A run that failed here fails the job, so that run_all reports it with this log.
+            return 1 if status == "failed" else 0
+        # Every run came from the store: where and in which Slurm job each ran.
+        nodes = {u["host"]: u["cpu"] for u in STORE.used}
+        record["backend"] = {"name": "slurm", "store": str(STORE.root), "nodes": nodes, "runs": STORE.used}
+        summary["nodes"] = nodes
     # Paths inside the repository are written relative to its root.
     def dump(x):
         return json.dumps(x, indent=1, default=str, ensure_ascii=False).replace(str(ROOT) + "/", "") + "\n"
