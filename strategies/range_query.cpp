@@ -5,8 +5,12 @@
 #include "core/error.h"
 #include "strategies/quantize.h"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 
 namespace oblong {
 
@@ -38,6 +42,20 @@ Interval bruteForceRange(const HeightMap& m, const SampleRange& r) {
         for (int i = px.lo[b]; i <= px.hi[b]; ++i) out.extend(m.atUnchecked(i, j));
   return out;
 }
+
+void* allocateLarge(size_t bytes) {
+  constexpr size_t kHuge = size_t(2) << 20;
+  if (bytes < 2 * kHuge) {
+    if (void* p = std::malloc(std::max<size_t>(bytes, 1))) return p;
+    throw std::bad_alloc();
+  }
+  const size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
+  void* p = std::aligned_alloc(kHuge, rounded);
+  if (!p) throw std::bad_alloc();
+  madvise(p, rounded, MADV_HUGEPAGE);  // advice only: no error if the kernel declines
+  return p;
+}
+void deallocateLarge(void* p, size_t) { std::free(p); }
 
 bool keepsQuantizer(const HeightMap& m, const SampleRange& changed, const Quantizer16& q, Interval& requested) {
   const Interval edited = bruteForceRange(m, changed);

@@ -256,7 +256,7 @@ void Rmip::buildPairs(T* data, const Enc& enc) {
 
   // Pixels -> level 1 across each row: H1[y][i] = pixels 2i..2i+2 of row y.
   const int n1 = X.count[1], e1 = X.interiorEnd(1);
-  std::vector<T> h1(size_t(rh_) * n1);
+  UninitVector<T> h1(size_t(rh_) * n1);
   tbb::parallel_for(tbb::blocked_range<int>(0, rh_, 8), [&](const tbb::blocked_range<int>& rows) {
     std::vector<T> px(static_cast<size_t>(rw_));
     int src[6];
@@ -285,6 +285,11 @@ void Rmip::buildPairs(T* data, const Enc& enc) {
       const int k = Y.sources(q, j, src);
       T* o = to + size_t(j) * L.nx;
       const T* r0 = from + size_t(src[0]) * L.nx;
+      if (k == 3) {  // the interior: rows 2j, 2j+1, 2j+2 in one pass
+        const T *r1 = from + size_t(src[1]) * L.nx, *r2 = from + size_t(src[2]) * L.nx;
+        for (int i = 0; i < L.nx; ++i) o[i] = join(join(r0[i], r1[i]), r2[i]);
+        return;
+      }
       std::copy(r0, r0 + L.nx, o);
       for (int t = 1; t < k; ++t) {
         const T* r = from + size_t(src[t]) * L.nx;
@@ -292,7 +297,7 @@ void Rmip::buildPairs(T* data, const Enc& enc) {
       }
     }, 4);
   }
-  std::vector<T>().swap(h1);
+  UninitVector<T>().swap(h1);
 
   // (p,q) from (p-1,q) along the rows.
   for (int p = 2; p <= P_; ++p) {
@@ -313,7 +318,7 @@ void Rmip::buildPairs(T* data, const Enc& enc) {
 
 void Rmip::buildCorners() {
   const HeightMap& m = map();
-  std::vector<Interval> data(layers_.empty() ? 0 : size_t(layers_.back().offset) + size_t(layers_.back().nx) * layers_.back().ny);
+  UninitVector<Interval> data(layers_.empty() ? 0 : size_t(layers_.back().offset) + size_t(layers_.back().nx) * layers_.back().ny);
 
   // Base pixels: min/max over each f x f block of samples (clipped to the map).
   std::vector<Interval> rowR(size_t(rw_) * rh_), rowNext(rowR.size());

@@ -207,8 +207,8 @@ class Rmip final : public RangeQueryImpl<Rmip> {
   bool wrap_ = false;
   Quantizer16 q_;
   std::vector<Layer> layers_;  // (P+1) x (Q+1), index p * (Q+1) + q
-  std::vector<uint32_t> q16_;  // bits 16
-  std::vector<Interval> f32_;  // bits 32
+  UninitVector<uint32_t> q16_;  // bits 16
+  UninitVector<Interval> f32_;  // bits 32
 };
 
 }  // namespace oblong
