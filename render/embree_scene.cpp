@@ -385,6 +385,8 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
       rtcSetGeometryBoundsFunction(geom, userBounds, nullptr);
       rtcSetGeometryIntersectFunction(geom, [](const RTCIntersectFunctionNArguments* a) { userIntersect<false>(a); });
       rtcSetGeometryOccludedFunction(geom, [](const RTCOccludedFunctionNArguments* a) { userIntersect<true>(a); });
+      // Bounds change only after an edit (update()); refitting keeps the BVH's topology.
+      rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_REFIT);
       rtcCommitGeometry(geom);
       const unsigned id = rtcAttachGeometry(scene_, geom);
       rtcReleaseGeometry(geom);
@@ -430,6 +432,25 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
   rtcCommitScene(scene_);
   if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) throw Error("embree: scene build failed");
   buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+EmbreeScene::UpdateTimes EmbreeScene::update(int mesh, const SampleRange& changed) {
+  for (size_t id = 0; id < geoms_.size(); ++id) {
+    Geometry* g = geoms_[id].get();
+    if (!g || g->mesh != mesh) continue;
+    if (!g->intersector) fail("update", "mesh {} is not traced as user geometry (pre-tessellated or plain)", mesh);
+    const Intersector::Update u = g->intersector->update(changed);
+    UpdateTimes t{u.structureSeconds, u.prismSeconds, 0.0, u.triangles.size()};
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!u.triangles.empty()) {
+      RTCGeometry geom = rtcGetGeometry(scene_, unsigned(id));
+      rtcCommitGeometry(geom);
+      rtcCommitScene(scene_);
+    }
+    t.bvhSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return t;
+  }
+  fail("update", "no displaced mesh {} in the scene", mesh);
 }
 
 EmbreeScene::~EmbreeScene() { release(); }

@@ -83,6 +83,15 @@ class EmbreeScene {
   // Intersector::describe() of each displaced mesh traced as user geometry ("mesh": its
   // index): the strategies with their resolved parameters and the code path that ran.
   nlohmann::json describe() const;
+  // The map of displaced mesh `mesh` was edited in `changed` (samples, inclusive, may
+  // wrap): its intersector updates what the edit reaches, then the BVH is refitted to the
+  // new prism bounds. Throws oblong::Error for a pre-tessellated scene or a baseline
+  // without an update.
+  struct UpdateTimes {
+    double structureSeconds = 0, prismSeconds = 0, bvhSeconds = 0;
+    size_t triangles = 0;  // prisms recomputed
+  };
+  UpdateTimes update(int mesh, const SampleRange& changed);
   size_t microTriangles() const { return microTriangles_; }
   size_t baseTriangles() const { return baseTriangles_; }
   double buildSeconds() const { return buildSeconds_; }

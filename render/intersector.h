@@ -10,6 +10,7 @@
 #include "core/params.h"
 #include "core/registry.h"
 #include "core/triangle.h"
+#include "strategies/range_query.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -101,6 +102,16 @@ class Intersector {
   // What was built and how it runs, for --stats and `oblong info`: the strategies with
   // their resolved parameters, the code path, the traversal options.
   virtual nlohmann::json describe() const { return {{"name", name()}}; }
+  // The displacement map's samples in `changed` (inclusive, may wrap) were edited:
+  // refresh the structures they affect, so that the intersector equals one built on the
+  // edited map. Reports the triangles whose bounds() may have changed (the caller refits
+  // its BVH over them) and the seconds spent. Intersectors without an incremental update
+  // throw oblong::Error.
+  struct Update {
+    std::vector<uint32_t> triangles;
+    double structureSeconds = 0, prismSeconds = 0;
+  };
+  virtual Update update(const SampleRange& changed);
 };
 
 // Baselines are registered like strategies (core/registry.h), one line in their .cpp:

@@ -3,6 +3,8 @@
 // See render/traversal/traversal.h and docs/traversal.md.
 #include "render/traversal/traversal.h"
 
+#include <chrono>
+
 #include "core/error.h"
 #include "core/scene.h"
 
@@ -76,6 +78,23 @@ std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p) {
 std::vector<StaticTraversal>& staticTraversals() {
   static std::vector<StaticTraversal> list;
   return list;
+}
+
+Intersector::Update Intersector::update(const SampleRange&) {
+  fail(name(), "cannot be updated after an edit of its map: build it again");
+}
+
+Intersector::Update TraversalIntersectorBase::update(const SampleRange& changed) {
+  using Clock = std::chrono::steady_clock;
+  Update u;
+  const auto t0 = Clock::now();
+  rq_->update(changed);
+  const auto t1 = Clock::now();
+  const RangeQuery& q = *rq_;
+  u.triangles = mesh_.update(changed, [&](const DisplacedTriangle& T) { return q.query(T.uvBox); });
+  u.structureSeconds = std::chrono::duration<double>(t1 - t0).count();
+  u.prismSeconds = std::chrono::duration<double>(Clock::now() - t1).count();
+  return u;
 }
 
 nlohmann::json TraversalIntersectorBase::describe() const {

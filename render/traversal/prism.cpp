@@ -1,6 +1,9 @@
 // Bounding prisms and the shell analysis (see prism.h for the reasoning).
 #include "render/traversal/prism.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <cmath>
 
 namespace oblong {
@@ -84,15 +87,27 @@ AABB BoxD::toFloatOutward() const {
   return r;
 }
 
-float maxCellDelta(const HeightMap& m) {
+float cellRowDelta(const HeightMap& m, int j) {
   float best = 0;
   const int W = m.width(), H = m.height();
-  for (int j = 0; j < H; ++j)
-    for (int i = 0; i < W; ++i) {
-      const float a = m.at(i, j), b = m.at(i + 1, j), c = m.at(i, j + 1), d = m.at(i + 1, j + 1);
-      best = std::max(best, std::max({a, b, c, d}) - std::min({a, b, c, d}));
-    }
+  const float* r0 = m.texels().data() + size_t(HeightMap::wrap(j, H)) * W;
+  const float* r1 = m.texels().data() + size_t(HeightMap::wrap(j + 1, H)) * W;
+  for (int i = 0; i < W; ++i) {
+    const int k = i + 1 < W ? i + 1 : 0;
+    const float a = r0[i], b = r0[k], c = r1[i], d = r1[k];
+    best = std::max(best, std::max({a, b, c, d}) - std::min({a, b, c, d}));
+  }
   return best;
+}
+
+float maxCellDelta(const HeightMap& m) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, m.height(), 16), 0.0f,
+      [&](const tbb::blocked_range<int>& r, float best) {
+        for (int j = r.begin(); j != r.end(); ++j) best = std::max(best, cellRowDelta(m, j));
+        return best;
+      },
+      [](float a, float b) { return std::max(a, b); });
 }
 
 PrismParams analyzeShell(const DisplacedTriangle& T, const Displacement& d, const Interval& heights,

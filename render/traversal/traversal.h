@@ -56,6 +56,8 @@ class TraversalIntersectorBase : public Intersector {
     return r;
   }
   nlohmann::json describe() const override;
+  // The range query's update, then the prisms of the triangles the edit reaches.
+  Update update(const SampleRange& changed) override;
   // "generic" (virtual calls into the strategies) or "static" (an opt-in instantiation
   // on the concrete strategy types).
   const std::string& path() const { return path_; }

@@ -109,15 +109,25 @@ struct TraversalMesh {
   std::vector<double> budgetPad;  // RayMargins::boxPad for an origin at the budget
   Displacement disp;
   float cellDelta = 0;  // maxCellDelta(map)
+  std::vector<float> rowDelta;  // cellRowDelta(map, j) per cell row: cellDelta after an edit
+  std::vector<Interval> lastHeights;  // each prism's heights (range query over T's uv box)
 
   // Builds the per-triangle constants; heights(T) is [hmin, hmax] over T's uv box.
   template <typename Heights>
   void build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights);
+  // After an edit of the map's samples in `changed` (the range query already updated):
+  // rebuilds the prisms whose heights changed, or all of them when the map's largest
+  // cell delta changed. Returns them.
+  template <typename Heights>
+  std::vector<uint32_t> update(const SampleRange& changed, Heights&& heights);
+  template <typename Heights>
+  void buildTriangle(size_t i, Heights&& heights);
   size_t bytes() const {
     return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
            cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
            prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
-           (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB);
+           (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB) +
+           rowDelta.capacity() * sizeof(float) + lastHeights.capacity() * sizeof(Interval);
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
@@ -146,7 +156,9 @@ template <typename Heights>
 void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights) {
   tris = std::move(triangles);
   disp = d;
-  cellDelta = maxCellDelta(*d.map);
+  rowDelta.resize(size_t(d.map->height()));
+  for (int j = 0; j < d.map->height(); ++j) rowDelta[size_t(j)] = cellRowDelta(*d.map, j);
+  cellDelta = rowDelta.empty() ? 0.0f : *std::max_element(rowDelta.begin(), rowDelta.end());
   params.resize(tris.size());
   cells.resize(tris.size());
   frames.resize(tris.size());
@@ -156,25 +168,62 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
   obbs.resize(tris.size());
   originBudget.assign(tris.size(), -1.0);
   budgetPad.assign(tris.size(), 0.0);
-  for (size_t i = 0; i < tris.size(); ++i) {
-    const DisplacedTriangle& T = tris[i];
-    cells[i] = cellsOverlapping(T, d);
-    const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
-    params[i] = ok ? analyzeShell(T, d, heights(T), cellDelta) : PrismParams{};
-    if (!params[i].valid) continue;
-    frames[i] = LocalFrame::make(T, d);
-    // Origins up to 16 times the triangle's own extent from the world origin (plus 16).
-    const double maxP = maxAbsVertex(T), ab = std::abs(params[i].a) + std::abs(params[i].b);
-    originBudget[i] = 16 * (maxP + ab) + 16;
-    const RayMargins m = RayMargins::make(params[i], maxP, originBudget[i]);
-    budgetPad[i] = m.boxPad;
-    prisms[i] = m.prism(frames[i], params[i]);
-    prismBoxes[i] = Prism::exact(T, params[i].a, params[i].b).bounds();
-    prismBoxes[i].pad(m.boxPad);
-    inflatedBoxes[i] = prisms[i].bounds();
-    inflatedBoxes[i].pad(m.boxPad);
-    obbs[i] = PrismOBB::around(prisms[i], T, m.boxPad);
+  lastHeights.assign(tris.size(), Interval{});
+  for (size_t i = 0; i < tris.size(); ++i) buildTriangle(i, heights);
+}
+
+template <typename Heights>
+void TraversalMesh::buildTriangle(size_t i, Heights&& heights) {
+  const Displacement& d = disp;
+  const DisplacedTriangle& T = tris[i];
+  cells[i] = cellsOverlapping(T, d);
+  const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
+  if (ok) lastHeights[i] = heights(T);
+  params[i] = ok ? analyzeShell(T, d, lastHeights[i], cellDelta) : PrismParams{};
+  if (!params[i].valid) return;
+  frames[i] = LocalFrame::make(T, d);
+  // Origins up to 16 times the triangle's own extent from the world origin (plus 16).
+  const double maxP = maxAbsVertex(T), ab = std::abs(params[i].a) + std::abs(params[i].b);
+  originBudget[i] = 16 * (maxP + ab) + 16;
+  const RayMargins m = RayMargins::make(params[i], maxP, originBudget[i]);
+  budgetPad[i] = m.boxPad;
+  prisms[i] = m.prism(frames[i], params[i]);
+  prismBoxes[i] = Prism::exact(T, params[i].a, params[i].b).bounds();
+  prismBoxes[i].pad(m.boxPad);
+  inflatedBoxes[i] = prisms[i].bounds();
+  inflatedBoxes[i].pad(m.boxPad);
+  obbs[i] = PrismOBB::around(prisms[i], T, m.boxPad);
+}
+
+template <typename Heights>
+std::vector<uint32_t> TraversalMesh::update(const SampleRange& changed, Heights&& heights) {
+  const HeightMap& m = *disp.map;
+  const int H = m.height();
+  // Cell rows y0-1 .. y1 hold the edited sample rows.
+  const int rows = int(std::min<int64_t>(int64_t(changed.y1) - changed.y0 + 2, H));
+  for (int r = 0; r < rows; ++r) {
+    const int j = HeightMap::wrap(changed.y0 - 1 + r, H);
+    rowDelta[size_t(j)] = cellRowDelta(m, j);
   }
+  const float delta = *std::max_element(rowDelta.begin(), rowDelta.end());
+  const bool all = delta != cellDelta;
+  cellDelta = delta;
+  // A prism depends on the map only through its heights (a range query over T's uv box)
+  // and the largest cell delta. A query can read stored entries well beyond the box (a
+  // pyramid's blocks, a mipmap's nodes, a safety zone's box, a global fallback), so each
+  // triangle's heights are asked again: a few lookups per triangle, and exactly the
+  // prisms whose inputs changed are rebuilt.
+  std::vector<uint32_t> touched;
+  for (size_t i = 0; i < tris.size(); ++i) {
+    if (!all) {
+      const DisplacedTriangle& T = tris[i];
+      const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
+      if (!ok || heights(T) == lastHeights[i]) continue;
+    }
+    buildTriangle(i, heights);
+    touched.push_back(uint32_t(i));
+  }
+  return touched;
 }
 
 }  // namespace oblong
