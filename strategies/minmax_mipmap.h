@@ -39,6 +39,15 @@ class MinMaxMipmap final : public RangeQueryImpl<MinMaxMipmap> {
   };
   static Layout layout(int W, int H, const QueryNeeds& needs, int bits = 32);
   static int levelSize(int n, int k) { return ((n - 1) >> k) + 1; }
+  // Bytes of a full 16-bit min-max mipmap of a W x H map, every level down to 1x1 with
+  // level 0 stored too (4 bytes per node): the RMIP paper's Table 1 reference.
+  static size_t fullBytes16(int W, int H) {
+    size_t b = 0;
+    for (int k = 0;; ++k) {
+      b += size_t(levelSize(W, k)) * size_t(levelSize(H, k)) * 4;
+      if (levelSize(W, k) == 1 && levelSize(H, k) == 1) return b;
+    }
+  }
 
   MinMaxMipmap(const Displacement& d, const QueryNeeds& needs, int bits = 32, Interval quantRange = {});
 

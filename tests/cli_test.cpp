@@ -111,7 +111,15 @@ TEST_CASE("oblong info: wrap corners only when some query crosses the map border
   INFO(tiled.out << tiled.err);
   REQUIRE(tiled.status == 0);
   CHECK(tiled.out.find("wrapping queries yes (the map is tiled)") != std::string::npos);
-  CHECK(tiled.out.find("wrap     : corners wrapping around the map border stored") != std::string::npos);
+  CHECK(tiled.out.find("wrap     : blocks wrapping around the map border filled") != std::string::npos);
+  // The "corners" layout stores the wrapping corners as extra entries.
+  std::ofstream(dir / "tiled_corners.json")
+      << R"({"meshes": [{"shape": {"type": "plane", "size": 2, "uv": [0.25, 0.25, 0.75, 0.75]},
+             "displacement": {"map": "map.png", "scale": 0.1, "tiling": 2}}],
+             "strategies": {"range": {"name": "rmip", "layout": "corners"}}})";
+  const Run corners = run("info " + (dir / "tiled_corners.json").string());
+  INFO(corners.out << corners.err);
+  CHECK(corners.out.find("wrap     : corners wrapping around the map border stored") != std::string::npos);
 }
 
 TEST_CASE("bad command-line input gives one clear error line", "[cli][bad_input]") {

@@ -29,13 +29,17 @@ using uint = uint32_t;
 #define OBLONG_BIND_COUNTERS 3     // CountersGpu[] (output, per ray)
 #define OBLONG_BIND_TRIANGLES 4    // TriGpu[]      (displaced triangles, all meshes)
 #define OBLONG_BIND_MESHES 5       // MeshGpu[]     (indexed by the instance's custom index)
-#define OBLONG_BIND_TEXELS 6       // float[]       (height maps, raw texels, row-major)
-#define OBLONG_BIND_RMIP_DATA 7    // vec2[]        (RMIP entries: min, max of raw texels)
+#define OBLONG_BIND_TEXELS 6       // float[] x OBLONG_CHUNKS (height maps, raw texels, row-major)
+#define OBLONG_BIND_RMIP_DATA 7    // uint[] x OBLONG_CHUNKS  (RMIP entries: Rmip::words())
 #define OBLONG_BIND_RMIP_LAYERS 8  // ivec4[]       (per layer: offset, nx, shiftX, shiftY)
 #define OBLONG_BIND_PLAIN_INDEX 9  // uint[]        (plain meshes: 3 vertex indices a triangle)
 #define OBLONG_BIND_PLAIN_UV 10    // vec2[]        (plain meshes: uv per vertex)
 #define OBLONG_BIND_PLAIN_POS 11   // float[]       (plain meshes: xyz per vertex)
 #define OBLONG_BIND_COUNT 12
+// The texels and the RMIP words are each split over up to OBLONG_CHUNKS buffers of
+// 2^MeshGpu::chunkShift elements, so that no buffer exceeds the device's
+// maxStorageBufferRange (128 MiB on lavapipe: a 16384^2 map takes 8 of them).
+#define OBLONG_CHUNKS 16
 
 // Hit kinds of the SBT: hit group 0 = displaced prisms (procedural), 1 = plain triangles.
 #define OBLONG_HITGROUP_PRISM 0
@@ -113,7 +117,7 @@ struct MeshGpu {
   float marchingScale;
   int inversionInTraversal;  // TraversalConfig::inversionInTraversal
   int displaced;
-  int pad;
+  int chunkShift;   // log2 of the elements per texel / RMIP buffer (OBLONG_CHUNKS)
   uint indexOffset;  // plain: first index (3 per triangle)
   uint vertexOffset; // plain: first vertex
 };

@@ -18,6 +18,7 @@
 #include <vulkan/vulkan.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstddef>
 #include <cstdlib>
@@ -157,6 +158,7 @@ struct Device {
   std::vector<VkAccelerationStructureKHR> structures;
   VkAccelerationStructureKHR tlas = VK_NULL_HANDLE;
   Buffer data[OBLONG_BIND_COUNT];  // by binding (0 unused: the TLAS)
+  std::vector<Buffer> texelChunks, rmipChunks;  // OBLONG_BIND_TEXELS, OBLONG_BIND_RMIP_DATA
   size_t rayCapacity = 0;
 
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
@@ -238,13 +240,14 @@ struct Device {
       VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
       vkGetPhysicalDeviceFeatures2(d, &f2);
       if (!rtf.rayTracingPipeline || !asf.accelerationStructure || !v12.bufferDeviceAddress ||
-          !v12.scalarBlockLayout || !f2.features.shaderFloat64)
+          !v12.scalarBlockLayout || !f2.features.shaderFloat64 || !v12.shaderStorageBufferArrayNonUniformIndexing)
         continue;
       if (rank(p.deviceType) < best) best = rank(p.deviceType), phys = d;
     }
     if (!phys)
       fail("--device vulkan", "no Vulkan device supports ray tracing (needs VK_KHR_ray_tracing_pipeline, "
-                              "VK_KHR_acceleration_structure, shaderFloat64, scalar block layout); devices: {}",
+                              "VK_KHR_acceleration_structure, shaderFloat64, scalar block layout, non-uniform "
+                              "storage-buffer indexing); devices: {}",
            seen.empty() ? "none" : seen);
     vkGetPhysicalDeviceProperties(phys, &props);
     rt.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_PROPERTIES_KHR;
@@ -279,6 +282,7 @@ struct Device {
     VkPhysicalDeviceVulkan12Features v12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &asf};
     v12.bufferDeviceAddress = VK_TRUE;
     v12.scalarBlockLayout = VK_TRUE;
+    v12.shaderStorageBufferArrayNonUniformIndexing = VK_TRUE;
     VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
     f2.features.shaderFloat64 = VK_TRUE;
     VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
@@ -378,6 +382,18 @@ struct Device {
     if (!v.empty()) std::memcpy(b.map, v.data(), v.size() * sizeof(T));
     return b;
   }
+  // v in buffers of `chunk` elements (at least one buffer, even for an empty v).
+  template <typename T>
+  std::vector<Buffer> uploadChunks(const std::vector<T>& v, size_t chunk, VkBufferUsageFlags usage) {
+    std::vector<Buffer> out;
+    for (size_t at = 0; at < v.size() || out.empty(); at += chunk) {
+      const size_t n = std::min(chunk, v.size() - std::min(at, v.size()));
+      Buffer b = makeBuffer(n * sizeof(T), usage, true);
+      if (n) std::memcpy(b.map, v.data() + at, n * sizeof(T));
+      out.push_back(b);
+    }
+    return out;
+  }
 
   void submit(const std::function<void(VkCommandBuffer)>& record) {
     VkCommandBufferAllocateInfo cai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -462,7 +478,7 @@ struct Device {
       binds[b].binding = b;
       binds[b].descriptorType = b == OBLONG_BIND_TLAS ? VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR
                                                       : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-      binds[b].descriptorCount = 1;
+      binds[b].descriptorCount = b == OBLONG_BIND_TEXELS || b == OBLONG_BIND_RMIP_DATA ? OBLONG_CHUNKS : 1;
       binds[b].stageFlags = all;
     }
     VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
@@ -470,7 +486,7 @@ struct Device {
     lci.pBindings = binds.data();
     check(vkCreateDescriptorSetLayout(device, &lci, nullptr, &setLayout), "vkCreateDescriptorSetLayout");
     const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, 1},
-                                           {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, OBLONG_BIND_COUNT - 1}};
+                                           {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, OBLONG_BIND_COUNT - 1 + 2 * (OBLONG_CHUNKS - 1)}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
     dpci.poolSizeCount = 2;
@@ -559,6 +575,12 @@ struct Device {
     asw.pAccelerationStructures = &tlas;
     std::vector<VkWriteDescriptorSet> w(OBLONG_BIND_COUNT);
     std::vector<VkDescriptorBufferInfo> infos(OBLONG_BIND_COUNT);
+    // Chunked bindings: every slot past the last chunk repeats chunk 0 (never read).
+    std::vector<VkDescriptorBufferInfo> texelInfos(OBLONG_CHUNKS), rmipInfos(OBLONG_CHUNKS);
+    for (uint32_t k = 0; k < OBLONG_CHUNKS; ++k) {
+      texelInfos[k] = {texelChunks[k < texelChunks.size() ? k : 0].buf, 0, VK_WHOLE_SIZE};
+      rmipInfos[k] = {rmipChunks[k < rmipChunks.size() ? k : 0].buf, 0, VK_WHOLE_SIZE};
+    }
     for (uint32_t b = 0; b < OBLONG_BIND_COUNT; ++b) {
       w[b] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       w[b].dstSet = set;
@@ -567,6 +589,10 @@ struct Device {
       if (b == OBLONG_BIND_TLAS) {
         w[b].pNext = &asw;
         w[b].descriptorType = VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR;
+      } else if (b == OBLONG_BIND_TEXELS || b == OBLONG_BIND_RMIP_DATA) {
+        w[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        w[b].descriptorCount = OBLONG_CHUNKS;
+        w[b].pBufferInfo = b == OBLONG_BIND_TEXELS ? texelInfos.data() : rmipInfos.data();
       } else {
         infos[b] = {data[b].buf, 0, VK_WHOLE_SIZE};
         w[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -669,14 +695,24 @@ VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
            what, maxRange);
   };
   fits(tris.size() * sizeof(TriGpu), "displaced triangles");
-  fits(texels.size() * sizeof(float), "height maps");
-  fits(rmipData.size() * sizeof(uint32_t), "RMIP layers");
+  // Texels and RMIP words: chunks of the largest power of two of 4-byte elements that
+  // fits the range (at most 2^30), up to OBLONG_CHUNKS of them.
+  const int chunkShift = std::min(30, int(std::bit_width(uint64_t(maxRange / 4))) - 1);
+  const size_t chunk = size_t(1) << chunkShift;
+  for (auto [n, what] : {std::pair{texels.size(), "height maps"}, std::pair{rmipData.size(), "RMIP layers"}})
+    if ((n + chunk - 1) / chunk > OBLONG_CHUNKS)
+      fail("--device vulkan", "{}: {} bytes of {} need {} buffers of {} bytes (maxStorageBufferRange), more than the "
+           "{} the shaders bind; use a smaller map, or rmip's \"resolution\" for the layers",
+           D.props.deviceName, n * 4, what, (n + chunk - 1) / chunk, chunk * 4, OBLONG_CHUNKS);
+  for (MeshGpu& m : meshes) m.chunkShift = chunkShift;
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   const VkBufferUsageFlags asInput = VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR;
   D.data[OBLONG_BIND_TRIANGLES] = D.upload(tris, ssbo);
   D.data[OBLONG_BIND_MESHES] = D.upload(meshes, ssbo);
-  D.data[OBLONG_BIND_TEXELS] = D.upload(texels, ssbo);
-  D.data[OBLONG_BIND_RMIP_DATA] = D.upload(rmipData, ssbo);
+  D.texelChunks = D.uploadChunks(texels, chunk, ssbo);
+  D.rmipChunks = D.uploadChunks(rmipData, chunk, ssbo);
+  std::vector<float>().swap(texels);  // the device has them now
+  std::vector<uint32_t>().swap(rmipData);
   D.data[OBLONG_BIND_RMIP_LAYERS] = D.upload(rmipLayers, ssbo);
   D.data[OBLONG_BIND_PLAIN_INDEX] = D.upload(plainIndex, ssbo | asInput);
   D.data[OBLONG_BIND_PLAIN_UV] = D.upload(plainUV, ssbo);

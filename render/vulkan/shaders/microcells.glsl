@@ -12,7 +12,8 @@ int wrapIndex(int i, int n) {  // HeightMap::wrap; GLSL's % is undefined for neg
   return i >= 0 ? i % n : n - 1 - ((-i - 1) % n);
 }
 float mapAt(int i, int j) {
-  return texels[g_mesh.texelOffset + uint(wrapIndex(j, g_mesh.H)) * uint(g_mesh.W) + uint(wrapIndex(i, g_mesh.W))];
+  return texelAt(g_mesh.texelOffset + uint(wrapIndex(j, g_mesh.H)) * uint(g_mesh.W) + uint(wrapIndex(i, g_mesh.W)),
+                 g_mesh.chunkShift);
 }
 // Displacement::sampleToUV
 vec2 sampleToUV(int i, int j) {

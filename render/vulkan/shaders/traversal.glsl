@@ -106,11 +106,11 @@ float rmipDecode(uint code) {
 // Entry idx of the mesh's layers (bits 16: one word of codes; bits 32: two float words).
 vec2 rmipEntry(uint idx) {
   if (g_mesh.rmipBits == 16) {
-    uint w = rmipWords[g_mesh.rmipData + idx];
+    uint w = rmipWordAt(g_mesh.rmipData + idx, g_mesh.chunkShift);
     return vec2(rmipDecode(w & 0xffffu), rmipDecode(w >> 16));
   }
   uint at = g_mesh.rmipData + 2u * idx;
-  return vec2(uintBitsToFloat(rmipWords[at]), uintBitsToFloat(rmipWords[at + 1u]));
+  return vec2(uintBitsToFloat(rmipWordAt(at, g_mesh.chunkShift)), uintBitsToFloat(rmipWordAt(at + 1u, g_mesh.chunkShift)));
 }
 vec2 rmipBlock(int x0, int x1, int y0, int y1) {
   int p = clamp(findMSB(x1 - x0 + 1), g_mesh.rmipFirst, g_mesh.rmipP);

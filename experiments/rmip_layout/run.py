@@ -1,0 +1,94 @@
+#!/usr/bin/python3
+"""RMIP's storage layouts side by side on the paper-scale scenes: bytes, build time, steps
+per camera ray and render time (docs/range_query.md, "Layouts").
+
+    experiments/rmip_layout/run.py [--build build] [--size 320x240] [--scenes a,b] [--out DIR]
+
+Each scene is rendered with camera rays only (1 spp, one thread) once per layout, the
+layouts interleaved per scene so that the time ratios are taken side by side. Writes
+results.csv and results.md into --out (default: this folder). Step counts are
+deterministic; times carry the machine's load, which the table records.
+"""
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent.parent
+sys.path.insert(0, str(HERE.parent / "lib"))
+from common import load_scene  # noqa: E402
+
+LAYOUTS = [
+    ("pairs_16", {"name": "rmip"}),  # the default
+    ("pairs_32", {"name": "rmip", "bits": 32}),
+    ("corners_c1_16", {"name": "rmip", "layout": "corners", "compression": 1, "bits": 16}),
+    ("corners_c1_32", {"name": "rmip", "layout": "corners", "compression": 1, "bits": 32}),
+]
+SCENES = ["paper/alien_sphere", "paper/terracotta_roof", "paper/diving_helmet", "paper/desert_tire",
+          "paper/creature", "asteroid"]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build", default="build")
+    ap.add_argument("--size", default="320x240")
+    ap.add_argument("--scenes", default=",".join(SCENES))
+    ap.add_argument("--out", default=str(HERE))
+    a = ap.parse_args()
+    oblong = (ROOT / a.build / "oblong").resolve()
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    load = os.getloadavg()
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in a.scenes.split(","):
+            doc = load_scene(ROOT / "scenes" / f"{name}.json")
+            for label, rq in LAYOUTS:
+                variant = dict(doc, strategies={"range": rq})
+                sp = Path(tmp) / f"{name.replace('/', '_')}_{label}.json"
+                sp.write_text(json.dumps(variant))
+                stats = Path(tmp) / "stats.json"
+                t0 = time.time()
+                r = subprocess.run([str(oblong), "render", str(sp), "-o", str(Path(tmp) / "img.png"), "--size", a.size,
+                                    "--spp", "1", "--integrator", "primary", "--threads", "1", "-q",
+                                    "--stats", str(stats)], capture_output=True, text=True)
+                if r.returncode != 0:
+                    print(f"{name} {label}: {r.stderr.strip()}", file=sys.stderr)
+                    return 1
+                s = json.loads(stats.read_text())
+                mem = s["memory"]
+                rows.append({
+                    "scene": name, "layout": label,
+                    "rmip_MiB": round(mem.get("rmip/layers", 0) / 2**20, 2),
+                    "build_s": round(s["seconds"]["build"], 3),
+                    "render_s": round(s["seconds"]["render"], 3),
+                    "steps_per_camera_ray": round(s["steps_per_camera_ray"], 3),
+                    "range_queries": s["ray_counters"]["range_queries"],
+                    "hit_fraction": round(s["rays"]["hits"] / max(1, s["rays"]["primary"]), 4),
+                    "peak_MiB": round(s.get("peak_memory", 0) / 2**20, 1),
+                })
+                print(rows[-1], flush=True)
+    with open(out / "results.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+    lines = [f"# RMIP layouts on the paper-scale scenes ({a.size}, camera rays, 1 thread)", "",
+             f"Run {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, load average at start "
+             f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}; {oblong}.", "",
+             "| scene | layout | rmip MiB | build s | render s | steps / camera ray | range queries | hits |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['scene']} | {r['layout']} | {r['rmip_MiB']} | {r['build_s']} | {r['render_s']} | "
+                     f"{r['steps_per_camera_ray']} | {r['range_queries']} | {r['hit_fraction']} |")
+    (out / "results.md").write_text("\n".join(lines) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
