@@ -451,6 +451,23 @@ TEST_CASE("vulkan: oblong trace --device vulkan writes the CPU's hits file", "[v
   REQUIRE(gpu.code == 0);
   CHECK(gpu.out.find("on Vulkan") != std::string::npos);
   CHECK(slurp(dir / "cpu.csv") == slurp(dir / "vk.csv"));  // same hits, same bits
+  {
+    // Texels and RMIP words split over several buffers (as a 16384^2 map needs on
+    // lavapipe): the same hits. Past 16 buffers: one clear error line.
+    ::setenv("OBLONG_VULKAN_MAX_BUFFER", "40000", 1);
+    const Run split = runOblong(fmt::format("trace {} --device vulkan --rays {} -o {}", scene,
+                                            (dir / "rays.csv").string(), (dir / "vk_split.csv").string()), dir);
+    INFO(split.err);
+    CHECK(split.code == 0);
+    CHECK(slurp(dir / "cpu.csv") == slurp(dir / "vk_split.csv"));
+    ::setenv("OBLONG_VULKAN_MAX_BUFFER", "4096", 1);
+    const Run many = runOblong(fmt::format("trace {} --device vulkan --rays {} -o {}", scene,
+                                           (dir / "rays.csv").string(), (dir / "x.csv").string()), dir);
+    ::unsetenv("OBLONG_VULKAN_MAX_BUFFER");
+    CHECK(many.code == 1);
+    CHECK(many.err.find("maxStorageBufferRange") != std::string::npos);
+    CHECK(std::count(many.err.begin(), many.err.end(), '\n') == 1);
+  }
   // Bad input: one line, exit status 1.
   for (const std::string& args :
        {fmt::format("trace {} --device vulkan --range minmax_mipmap --rays {} -o {}", scene,

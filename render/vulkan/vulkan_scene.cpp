@@ -688,7 +688,15 @@ VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
 
   dev_ = std::make_unique<Device>();
   Device& D = *dev_;
-  const VkDeviceSize maxRange = D.props.limits.maxStorageBufferRange;
+  VkDeviceSize maxRange = D.props.limits.maxStorageBufferRange;
+  // OBLONG_VULKAN_MAX_BUFFER (bytes) lowers the range, to test the chunked layout with
+  // small maps.
+  if (const char* e = std::getenv("OBLONG_VULKAN_MAX_BUFFER")) {
+    char* end = nullptr;
+    const unsigned long long v = std::strtoull(e, &end, 10);
+    if (!end || *end || v < 64) fail("OBLONG_VULKAN_MAX_BUFFER", "expected bytes (at least 64), got '{}'", e);
+    maxRange = std::min<VkDeviceSize>(maxRange, v);
+  }
   auto fits = [&](size_t bytes, const char* what) {
     if (bytes > maxRange)
       fail("--device vulkan", "{}: {} bytes of {} exceed maxStorageBufferRange ({} bytes)", D.props.deviceName, bytes,
