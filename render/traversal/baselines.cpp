@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -22,14 +23,25 @@ OBLONG_STAT_COUNTER("fixedstep/Hits", fsHits);
 
 namespace {
 
-// Heights over T's uv box by brute force over the snapped sample range (baselines: no
-// RangeQuery is built for them).
-Interval exactHeights(const DisplacedTriangle& T, const Displacement& d) {
+// The samples under T's uv box, snapped outward; exactHeights: the heights over them by
+// brute force (baselines: no RangeQuery is built for them).
+SampleRange samplesOf(const DisplacedTriangle& T, const Displacement& d) {
   const dvec2 a = d.toSample(T.uvBox.lo), b = d.toSample(T.uvBox.hi);
   constexpr double eps = 1e-5, lim = 1e9;
-  const SampleRange r{int(std::clamp(std::floor(a.x - eps), -lim, lim)), int(std::clamp(std::floor(a.y - eps), -lim, lim)),
-                      int(std::clamp(std::ceil(b.x + eps), -lim, lim)), int(std::clamp(std::ceil(b.y + eps), -lim, lim))};
-  return d.toHeight(bruteForceRange(*d.map, r));
+  return {int(std::clamp(std::floor(a.x - eps), -lim, lim)), int(std::clamp(std::floor(a.y - eps), -lim, lim)),
+          int(std::clamp(std::ceil(b.x + eps), -lim, lim)), int(std::clamp(std::ceil(b.y + eps), -lim, lim))};
+}
+Interval exactHeights(const DisplacedTriangle& T, const Displacement& d) {
+  return d.toHeight(bruteForceRange(*d.map, samplesOf(T, d)));
+}
+
+// Do the inclusive index ranges [a0,a1] and [c0,c1] meet modulo n?
+bool meetsWrapped(int64_t a0, int64_t a1, int64_t c0, int64_t c1, int n) {
+  const int64_t la = a1 - a0 + 1, lc = c1 - c0 + 1;
+  if (la <= 0 || lc <= 0) return false;
+  if (la >= n || lc >= n) return true;
+  const int64_t s = ((c0 - a0) % n + n) % n;  // start of c, relative to a0
+  return s < la || s + lc > n;
 }
 
 // The oracle: every micro-triangle of the triangle, in cell order, no pruning at all
@@ -84,6 +96,24 @@ class FixedStep final : public Intersector {
   size_t size() const override { return mesh_.tris.size(); }
   AABB bounds(uint32_t prim) const override { return mesh_.bounds(prim); }
   MemoryReport memory() const override { return {{"fixedstep/triangles", mesh_.bytes()}}; }
+
+  // No range-query structure: a prism's heights are brute-force over its triangle's
+  // samples, so only triangles whose samples meet the edit are scanned again (the
+  // others keep their heights; all prisms are redone if the largest cell delta moved).
+  Update update(const SampleRange& changed) override {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Displacement& d = mesh_.disp;
+    const int W = d.map->width(), H = d.map->height();
+    Update u;
+    u.triangles = mesh_.update(changed, [&](const DisplacedTriangle& T) {
+      const SampleRange r = samplesOf(T, d);
+      if (meetsWrapped(r.x0, r.x1, changed.x0, changed.x1, W) && meetsWrapped(r.y0, r.y1, changed.y0, changed.y1, H))
+        return exactHeights(T, d);
+      return mesh_.lastHeights[size_t(&T - mesh_.tris.data())];
+    });
+    u.prismSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return u;
+  }
 
   bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
     const PrismParams& P = mesh_.params[prim];
