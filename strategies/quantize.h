@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -19,6 +20,7 @@ namespace oblong {
 
 struct Quantizer16 {
   float base = 0.0f, step = 1.0f;
+  float invStep = 1.0f;  // 1 / step: only for the encoder's first guess
 
   // The range that codes cover: [0, 1] when the values lie in it (every 8/16-bit map, so
   // that edits within [0, 1] keep the same codes), else the values' own [min, max].
@@ -34,6 +36,7 @@ struct Quantizer16 {
     if (!std::isfinite(q.step) || q.step <= 0.0f) q.step = std::numeric_limits<float>::min();
     // The top code must reach the range's max after rounding.
     while (q.decode(65535) < range.hi) q.step = std::nextafter(q.step, std::numeric_limits<float>::infinity());
+    q.invStep = 1.0f / q.step;
     return q;
   }
   bool covers(const Interval& v) const { return v.isEmpty() || (v.lo >= base && v.hi <= decode(65535)); }
@@ -44,23 +47,32 @@ struct Quantizer16 {
   }
   // Largest code whose value is <= v (v >= base), smallest code whose value is >= v.
   uint32_t codeBelow(float v) const {
-    const float c = (v - base) / step;  // a guess, corrected by the loops
+    const float c = (v - base) * invStep;  // a guess, corrected by the loops
     uint32_t k = c >= 65535.0f ? 65535u : (c > 0.0f ? uint32_t(c) : 0u);
     while (k > 0 && decode(k) > v) --k;
     while (k < 65535 && decode(k + 1) <= v) ++k;
     return k;
   }
   uint32_t codeAbove(float v) const {
-    const float c = std::ceil((v - base) / step);
+    const float c = std::ceil((v - base) * invStep);
     uint32_t k = c >= 65535.0f ? 65535u : (c > 0.0f ? uint32_t(c) : 0u);
     while (k < 65535 && decode(k) < v) ++k;
     while (k > 0 && decode(k - 1) >= v) --k;
     return k;
   }
+  // One value (a sample): the code below it, and the same code when it decodes exactly
+  // to the value, else the next one (codeBelow leaves decode(k + 1) > v).
+  uint32_t encodeSample(float v) const {
+    const uint32_t k = codeBelow(v);
+    return k | ((decode(k) == v ? k : std::min<uint32_t>(k + 1, 65535u)) << 16);
+  }
   // An empty interval encodes as lo code 65535, hi code 0 (the identity of join16).
+  // Where the step is below the float spacing of the values, neighbouring codes decode to
+  // the same float: the high code is kept >= the low one so the pair never reads as empty.
   uint32_t encode(const Interval& v) const {
     if (v.isEmpty()) return 0xffffu;
-    return codeBelow(v.lo) | (codeAbove(v.hi) << 16);
+    const uint32_t lo = codeBelow(v.lo);
+    return lo | (std::max(lo, codeAbove(v.hi)) << 16);
   }
   Interval decodePair(uint32_t w) const {
     if ((w & 0xffffu) > (w >> 16)) return Interval::empty();

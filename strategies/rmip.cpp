@@ -236,7 +236,7 @@ void Rmip::build() {
   if (scheme_ == Scheme::Pairs) {
     if (bits_ == 16) {
       q16_.resize(total);
-      buildPairs(q16_.data(), [this](const Interval& v) { return q_.encode(v); });
+      buildPairs(q16_.data(), [this](const Interval& v) { return v.lo == v.hi ? q_.encodeSample(v.lo) : q_.encode(v); });
     } else {
       f32_.resize(total);
       buildPairs(f32_.data(), [](const Interval& v) { return v; });
@@ -388,7 +388,8 @@ void Rmip::update(const SampleRange& changed) {
       build();
       return;
     }
-    updatePairs(q16_.data(), [this](const Interval& v) { return q_.encode(v); }, changed);
+    updatePairs(q16_.data(), [this](const Interval& v) { return v.lo == v.hi ? q_.encodeSample(v.lo) : q_.encode(v); },
+                changed);
   } else {
     updatePairs(f32_.data(), [](const Interval& v) { return v; }, changed);
   }

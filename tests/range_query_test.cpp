@@ -340,3 +340,28 @@ TEST_CASE("update after an edit equals a full build, bit for bit", "[range_query
       }
   CHECK(compared > 500);
 }
+
+TEST_CASE("16-bit codes stay conservative when the step is below the values' float spacing", "[range_query]") {
+  // Values in [1000, 1000.01]: a code step of 1.5e-7 is far below float's spacing at
+  // 1000 (6.1e-5), so many codes decode to the same float. Bounds must still contain the
+  // truth and never read as empty.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> v(1000.0f, 1000.01f);
+  std::vector<float> t(40 * 23);
+  for (float& x : t) x = v(rng);
+  auto map = std::make_shared<HeightMap>(40, 23, t, "offset");
+  Displacement disp;
+  disp.map = map;
+  for (const char* n : {"rmip", "minmax_mipmap", "safety_zones"}) {
+    ParamSet ps(json{{"bits", 16}}, "test");
+    const auto rq = createRangeQuery(n, ps, {disp, QueryNeeds::all(*map)});
+    for (int k = 0; k < 2000; ++k) {
+      const SampleRange r = randomRange(rng, 40, 23);
+      const Interval got = rq->rawRange(r), truth = bruteForceRange(*map, r);
+      INFO(n << " [" << r.x0 << "," << r.x1 << "]x[" << r.y0 << "," << r.y1 << "] got " << got.lo << " " << got.hi
+              << " truth " << truth.lo << " " << truth.hi);
+      REQUIRE(!got.isEmpty());
+      REQUIRE(got.contains(truth));
+    }
+  }
+}
