@@ -4,6 +4,7 @@
 //                 [--stats out.json] [strategy flags]
 //   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv [--stats out.json] [strategy flags]
 //   oblong info   [SCENE.json] [--range NAME] | --strategies [--json]
+//   oblong bake   [SCENE.json] -o SCENE.oblg [--size WxH] [--rays RAYS] [strategy flags]
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
 // --splitter, --marching-scale, --inversion-in-traversal, --baseline, --step.
 // Without a scene file, the built-in default scene is used (no data files needed).
@@ -328,6 +329,19 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   return res.partial ? kInterruptedStatus : 0;
 }
 
+// `oblong bake`: the Vulkan path's upload records and ray generation in one file for
+// oblong_vkbench (render/vulkan/bake_file.h).
+int runBake(const std::string& scenePath, const std::string& out, const std::string& size,
+            const std::string& raysPath, const StrategyFlags& flags) {
+  checkOutputPath(out, "baked scene");
+  checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}});
+  const Scene scene = sceneFrom(scenePath);
+  const AccelOptions accelOpts = flags.resolve(scene);
+  const ivec2 image = size.empty() ? scene.imageSize : parseSize(size);
+  const std::vector<Ray> rays = raysPath.empty() ? std::vector<Ray>() : readRays(raysPath);
+  return vk::bakeCommand(scene, accelOpts, image, rays, out, OBLONG_VERSION);
+}
+
 int runTrace(const std::string& scenePath, const std::string& raysPath, const std::string& out, bool defaultOut,
              int threads, const std::string& statsPath, const StrategyFlags& flags) {
   if (threads < 0) fail("--threads", "must be >= 0, got {}", threads);
@@ -563,6 +577,14 @@ int main(int argc, char** argv) {
   trace->add_option("--device", deviceFlag, "cpu (Embree) | vulkan (ray tracing pipeline, docs/vulkan.md)")
       ->check(CLI::IsMember({"cpu", "vulkan"}));
 
+  auto* bake = app.add_subcommand("bake", "write what the Vulkan path uploads into one file for oblong_vkbench");
+  std::string bakeOut, bakeSize;
+  bake->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  bake->add_option("-o,--output", bakeOut, "baked scene (.oblg, docs/vulkan.md)")->required();
+  bake->add_option("--size", bakeSize, "camera rays' image size WxH (default: the scene's)");
+  bake->add_option("--rays", raysPath, "also store this ray file (CSV or .bin, as for trace)");
+  flags.add(bake);
+
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
   info->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
   info->add_option("--range", range, "range-query strategy (default: the scene's)");
@@ -587,6 +609,7 @@ int main(int argc, char** argv) {
     rf.defaultOut = renderOut->count() == 0;
     if (*render) return runRender(scenePath, rf, flags);
     if (*trace) return runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, flags);
+    if (*bake) return runBake(scenePath, bakeOut, bakeSize, raysPath, flags);
     if (*info && listStrategies) return runStrategies(infoJson);
     if (*info && infoJson) fail("--json", "only applies to --strategies");
     if (*info) return runInfo(scenePath, range);

@@ -5,11 +5,14 @@
 #include "core/stats.h"
 #include "render/output.h"
 #include "render/rays_io.h"
+#include "render/vulkan/bake_file.h"
 #include "render/vulkan/vulkan_render.h"
 #include "render/vulkan/vulkan_scene.h"
 
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
+
+#include <filesystem>
 
 
 namespace oblong::vk {
@@ -94,6 +97,31 @@ int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOpti
     j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
     writeJson(statsPath, j);
   }
+  return 0;
+}
+
+int bakeCommand(const Scene& scene, const AccelOptions& opts, ivec2 image, const std::vector<Ray>& rays,
+                const std::string& out, const std::string& version) {
+  BakedScene b;
+  b.records = buildRecords(scene, opts);
+  b.scene = scene.path;
+  b.version = version;
+  b.camera = scene.camera;
+  b.image = image;
+  b.lights = scene.lights;
+  for (const SceneMesh& sm : scene.meshes) b.albedo.push_back(sm.albedo);
+  const RenderOptions defaults;  // the renderer's sky and path length
+  b.sky = defaults.sky;
+  b.maxDepth = defaults.maxDepth;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (!(rays[i].tmin >= 0.0f)) fail("--rays", "ray {}: tmin = {} < 0 (Vulkan needs tmin >= 0)", i, rays[i].tmin);
+    b.rays.push_back({rays[i].o, rays[i].d, rays[i].tmin, rays[i].tmax});
+  }
+  writeBake(out, b);
+  const auto bytes = std::filesystem::file_size(out);
+  fmt::print("oblong bake: {} -> {}: {} meshes, {} base triangles, {}, {:.1f} MiB (camera {}x{}{})\n", scene.path,
+             out, scene.meshes.size(), b.records.baseTriangles, b.records.geometryName, double(bytes) / (1 << 20),
+             image.x, image.y, rays.empty() ? "" : fmt::format(", {} rays", rays.size()));
   return 0;
 }
 

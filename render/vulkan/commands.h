@@ -1,4 +1,4 @@
-// `--device vulkan` for oblong trace and oblong render (render/main.cpp calls these
+// `--device vulkan` for oblong trace and oblong render, and oblong bake (render/main.cpp calls these
 // after it has read the scene, the strategy flags and the rays). Without the Vulkan
 // target (CMake option OBLONG_VULKAN off, or Vulkan / glslc not installed), the stubs
 // in commands_stub.cpp fail with one line saying so.
@@ -22,5 +22,10 @@ int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector
 // optional AOVs / heat map / stats.
 int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOptions& ro, const std::string& out,
                   const std::string& aovs, const std::string& heatmap, const std::string& statsPath);
+
+// `oblong bake`: the scene's upload records, camera, image size, lights and albedos,
+// and the rays when given, into one baked file (bake_file.h); prints one summary line.
+int bakeCommand(const Scene& scene, const AccelOptions& opts, ivec2 image, const std::vector<Ray>& rays,
+                const std::string& out, const std::string& version);
 
 }  // namespace oblong::vk

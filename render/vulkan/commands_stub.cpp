@@ -22,4 +22,9 @@ int renderCommand(const Scene&, const AccelOptions&, const RenderOptions&, const
   noVulkan();
 }
 
+int bakeCommand(const Scene&, const AccelOptions&, ivec2, const std::vector<Ray>&, const std::string&,
+                const std::string&) {
+  noVulkan();
+}
+
 }  // namespace oblong::vk

@@ -1,15 +1,15 @@
 // The Vulkan ray tracing path (issue 7; DESIGN §4 "Run the canonical configuration on
-// Vulkan ray tracing"): a headless Vulkan 1.2 device with VK_KHR_ray_tracing_pipeline
-// and VK_KHR_acceleration_structure (Mesa's lavapipe on the CPU, or a GPU), one bottom
-// level of AABB geometry per displaced mesh (one AABB per bounding prism: the CPU's
-// Intersector::bounds), one of triangle geometry per undisplaced mesh, a top level over
-// them, and the traversal in an intersection shader. Same rays in, same hits out as
-// EmbreeScene::intersect (docs/vulkan.md has the layouts and the parity numbers).
+// Vulkan ray tracing"): the scene's upload records (records.h, built by the CPU's own
+// code) on the device runner (runner.h): one AABB per bounding prism (the CPU's
+// Intersector::bounds), triangles for undisplaced meshes, and the traversal in an
+// intersection shader. Same rays in, same hits out as EmbreeScene::intersect
+// (docs/vulkan.md has the layouts and the parity numbers).
 #pragma once
 
 #include "core/memory.h"
 #include "core/scene.h"
 #include "render/embree_scene.h"
+#include "render/vulkan/records.h"
 
 #include <memory>
 #include <string>
@@ -17,7 +17,12 @@
 
 namespace oblong::vk {
 
-struct Device;  // instance, device, pipeline (vulkan_scene.cpp)
+class Runner;
+
+// The records of every mesh, built with the CPU's own code (createIntersector). Throws
+// oblong::Error with one line when the configuration is not the canonical one
+// (rmip + newton + midpoint2d, no baseline) or the maps exceed the 32-bit offsets.
+GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts);
 
 class VulkanScene {
  public:
@@ -44,7 +49,7 @@ class VulkanScene {
   size_t baseTriangles() const { return baseTriangles_; }
 
  private:
-  std::unique_ptr<Device> dev_;
+  std::unique_ptr<Runner> run_;
   std::string geometryName_;
   double buildSeconds_ = 0;
   size_t baseTriangles_ = 0;

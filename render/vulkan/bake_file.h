@@ -1,0 +1,48 @@
+// The baked scene file (`oblong bake SCENE -o scene.oblg`, read by oblong_vkbench):
+// everything the Vulkan path uploads (records.h) plus what generates the rays (camera,
+// image size, lights and albedos for the path integrator, and optionally a ray list),
+// so that a machine with a GPU and none of the CPU libraries can run the traversal.
+//
+// Layout (little-endian): a 32-byte header
+//   char magic[8] = "OBLGBAKE"; u32 version; u32 sections; u64 fileBytes; u64 tableChecksum
+// then `sections` entries {char name[16]; u64 offset; u64 bytes; u64 checksum}, then the
+// sections' bytes. Checksums are FNV-1a 64 over 8-byte words (checksum64). Section
+// "meta" is JSON (format, version, struct sizes, scene, camera, image, lights, ...); the
+// others are the arrays of GpuRecords as they lie in memory. The version changes with
+// any change of shared.h's structs: a file of another version is refused.
+#pragma once
+
+#include "core/scene.h"
+#include "render/vulkan/records.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace oblong::vk {
+
+inline constexpr uint32_t kBakeVersion = 1;
+
+struct BakedScene {
+  GpuRecords records;
+  std::string scene;    // path of the scene it was baked from
+  std::string version;  // oblong's version that baked it
+  Camera camera;
+  ivec2 image{640, 480};       // default size of the camera rays
+  std::vector<Light> lights;   // path integrator
+  std::vector<vec3> albedo;    // per mesh
+  vec3 sky{0.12f, 0.14f, 0.18f};
+  int maxDepth = 5;
+  std::vector<vkgpu::RayGpu> rays;  // optional: a fixed ray list (bake --rays)
+};
+
+// FNV-1a 64 over little-endian 8-byte words (the tail zero-padded), then the length.
+uint64_t checksum64(const void* data, size_t bytes);
+
+// Throws oblong::Error naming the file on any write error.
+void writeBake(const std::string& path, const BakedScene& b);
+// Throws oblong::Error with one line naming the file on a missing, foreign, truncated,
+// corrupt or other-version file.
+BakedScene readBake(const std::string& path);
+
+}  // namespace oblong::vk

@@ -1,0 +1,50 @@
+// The Vulkan device runner: a headless Vulkan 1.2 device with VK_KHR_ray_tracing_pipeline
+// and VK_KHR_acceleration_structure (Mesa's lavapipe on the CPU, or a GPU), the records
+// of records.h uploaded, one bottom level of AABB geometry per displaced mesh (one AABB
+// per bounding prism), one of triangle geometry per undisplaced mesh, a top level over
+// them, the pipeline of shaders/, and dispatches of rays. Needs only the Vulkan loader
+// (and header-only fmt), so that oblong_vkbench runs where none of the CPU libraries are.
+#pragma once
+
+#include "render/vulkan/records.h"
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace oblong::vk {
+
+struct Device;  // instance, device, pipeline (runner.cpp)
+
+class Runner {
+ public:
+  // Takes the records (the large arrays are freed once on the device). Throws
+  // oblong::Error with one line when no Vulkan device supports ray tracing or the
+  // records do not fit the device's limits.
+  explicit Runner(GpuRecords records);
+  ~Runner();
+  Runner(const Runner&) = delete;
+  Runner& operator=(const Runner&) = delete;
+
+  // First hit of n rays (tmin >= 0) into hits[0, n), per-ray work into counters when
+  // not null. anyHit: occlusion rays. *seconds: wall time of the dispatches; *gpuSeconds:
+  // their GPU time from timestamp queries (-1 when the queue has no timestamps).
+  void trace(const vkgpu::RayGpu* rays, size_t n, vkgpu::HitGpu* hits, vkgpu::CountersGpu* counters, bool anyHit,
+             double* seconds = nullptr, double* gpuSeconds = nullptr);
+
+  std::string deviceName() const;  // e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+  std::string driverInfo() const;  // e.g. "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"
+  const std::string& geometryName() const { return geometryName_; }
+  uint64_t baseTriangles() const { return baseTriangles_; }
+  // (name, bytes) of every part on the device: "vulkan/triangles", "vulkan/blas", ...
+  const std::vector<std::pair<std::string, size_t>>& memory() const { return memory_; }
+
+ private:
+  std::unique_ptr<Device> dev_;
+  std::string geometryName_;
+  uint64_t baseTriangles_ = 0;
+  std::vector<std::pair<std::string, size_t>> memory_;
+};
+
+}  // namespace oblong::vk
