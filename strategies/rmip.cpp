@@ -182,7 +182,7 @@ void Rmip::checkMemory(const HeightMap& m, const QueryNeeds& needs, const Option
   std::string hint;
   for (size_t i = 0; i < alt.size(); ++i) hint += (i ? " or " : "try ") + alt[i];
   if (!alt.empty()) hint += " in \"strategies\": {\"range\": {...}}";
-  const size_t mm = MinMaxMipmap::layout(W, H, needs, 16).bytes();
+  const size_t mm = MinMaxMipmap::layout(W, H, needs).bytes();  // what --range minmax_mipmap builds
   if (fitsInMemory(mm)) hint += fmt::format("{}--range minmax_mipmap ({})", alt.empty() ? "try " : ", or ", humanBytes(mm));
   if (hint.empty()) hint = "no range query fits: free memory or use a smaller map";
   checkFits(m.name(), "rmip", L.buildBytes(), hint,

@@ -185,7 +185,7 @@ TEST_CASE("a range query that does not fit is refused in one line with what woul
   CHECK_THAT(msg, Contains(fmt::format("try \"resolution\": 512 ({})", humanBytes(half))) &&
                       Contains(fmt::format("\"layout\": \"pairs\", \"bits\": 16 ({})", humanBytes(pairs))) &&
                       Contains(fmt::format("--range minmax_mipmap ({})",
-                                           humanBytes(MinMaxMipmap::layout(1024, 1024, needs, 16).bytes()))));
+                                           humanBytes(MinMaxMipmap::layout(1024, 1024, needs).bytes()))));
   // What the hint offers builds under the same limit.
   CHECK(make("rmip", {{"layout", "corners"}, {"resolution", 512}}, d, needs)->bytes() > 0);
   CHECK(make("rmip", json::object(), d, needs)->bytes() > 0);
