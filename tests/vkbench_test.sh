@@ -30,6 +30,7 @@ libs="$(ldd "$VKBENCH" | awk '{print $1}' | sed 's/\.so.*//')"
 for l in $libs; do
   case "$l" in
     linux-vdso | /lib64/ld-linux-x86-64 | ld-linux* | libvulkan | libc | libm | libstdc++ | libgcc_s | libdl | libpthread | librt) ;;
+    libasan | libubsan | liblsan) ;;  # the sanitizer build's runtimes
     *) fail "oblong_vkbench links $l (ldd): only the Vulkan loader and the C/C++ runtime are allowed" ;;
   esac
 done
