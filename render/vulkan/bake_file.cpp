@@ -52,7 +52,7 @@ uint64_t checksum64(const void* data, size_t bytes) {
     h = (h ^ w) * prime;
   }
   uint64_t tail = 0;
-  std::memcpy(&tail, p + i, bytes - i);
+  if (bytes > i) std::memcpy(&tail, p + i, bytes - i);  // empty arrays may have no data pointer
   h = (h ^ tail) * prime;
   return (h ^ uint64_t(bytes)) * prime;
 }
