@@ -10,9 +10,9 @@
 #   bash tests/vkbench_test.sh OBLONG OBLONG_VKBENCH SOURCE_DIR      (CTest: label `vulkan`)
 set -euo pipefail
 
-OBLONG="${1:?usage: vkbench_test.sh OBLONG OBLONG_VKBENCH SOURCE_DIR}"
-VKBENCH="${2:?}"
-SRC="${3:?}"
+OBLONG="$(realpath "${1:?usage: vkbench_test.sh OBLONG OBLONG_VKBENCH SOURCE_DIR}")"
+VKBENCH="$(realpath "${2:?}")"
+SRC="$(realpath "${3:?}")"
 SKIP=77
 # As tests/vulkan_test.cpp: lavapipe without LLVM's optimisation passes (same bits, the
 # pipeline compiles in seconds) into the tests' own shader cache.
