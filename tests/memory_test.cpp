@@ -126,7 +126,8 @@ TEST_CASE("range-query estimates equal the bytes of the built structures", "[mem
       for (int res : {0, std::max(W, H) / 2, 7})
         for (int comp : {-1, 0, 1, 2, 99})  // -1: "pairs"
           for (int bits : {16, 32}) {
-            if (W * H > 1 << 16 && comp == 99) continue;  // uncompressed 1024^2: ~1 GB
+            // Uncompressed 1024^2: ~1 GB; on that map one "corners" case is enough.
+            if (W * H > 1 << 16 && (comp == 99 || comp == 0 || comp == 2)) continue;
             INFO("resolution " << res << " compression " << comp << " bits " << bits);
             const Rmip::Options o{.resolution = res, .compression = std::max(comp, 0),
                                   .layout = comp < 0 ? Rmip::Scheme::Pairs : Rmip::Scheme::Corners, .bits = bits};
