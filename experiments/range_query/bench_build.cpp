@@ -9,6 +9,7 @@
 // every TBB thread. Counters: MB = the structure's bytes, GBps = (map bytes read +
 // structure bytes written) / time, texels_per_s. bandwidth/read and bandwidth/copy time a
 // plain sum and a memcpy over 1 GiB with the same threads: the ceiling such a pass meets.
+#include "experiments/range_query/relief_map.h"
 #include "strategies/range_query.h"
 
 #include <benchmark/benchmark.h>
@@ -26,26 +27,11 @@ using namespace oblong;
 
 namespace {
 
-// A 16-bit-like relief in [0, 1]: a few octaves of sines and a little noise, quantised to
-// 1/65535 as a 16-bit PNG or TIFF would load. Deterministic, generated once per size.
+// One map per size, generated once.
 std::shared_ptr<HeightMap> reliefMap(int n) {
   static std::map<int, std::shared_ptr<HeightMap>> cache;
-  if (auto it = cache.find(n); it != cache.end()) return it->second;
-  std::vector<float> t(size_t(n) * n);
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 64), [&](const tbb::blocked_range<int>& rows) {
-    std::mt19937 rng(uint32_t(rows.begin()) * 7919u + 1u);
-    std::uniform_real_distribution<float> noise(-1.0f, 1.0f);
-    for (int j = rows.begin(); j != rows.end(); ++j)
-      for (int i = 0; i < n; ++i) {
-        const double x = 2 * M_PI * i / n, y = 2 * M_PI * j / n;
-        const double h = 0.45 * std::sin(3 * x + 1.0) * std::cos(2 * y) + 0.25 * std::sin(11 * x + 7 * y) +
-                         0.12 * std::sin(37 * x - 23 * y + 0.3) + 0.06 * std::cos(101 * x + 89 * y) +
-                         0.03 * noise(rng);
-        t[size_t(j) * n + i] = float(std::round((0.5 + 0.5 * h / 0.95) * 65535.0) / 65535.0);
-      }
-  });
-  auto m = std::make_shared<HeightMap>(n, n, std::move(t), fmt::format("relief{}", n));
-  cache[n] = m;
+  auto& m = cache[n];
+  if (!m) m = bench::reliefMap(n);
   return m;
 }
 
