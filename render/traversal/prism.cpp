@@ -87,12 +87,12 @@ AABB BoxD::toFloatOutward() const {
   return r;
 }
 
-float cellRowDelta(const HeightMap& m, int j) {
+float cellRowDelta(const HeightMap& m, int j, int i0, int i1) {
   float best = 0;
   const int W = m.width(), H = m.height();
   const float* r0 = m.texels().data() + size_t(HeightMap::wrap(j, H)) * W;
   const float* r1 = m.texels().data() + size_t(HeightMap::wrap(j + 1, H)) * W;
-  for (int i = 0; i < W; ++i) {
+  for (int i = i0; i < i1; ++i) {
     const int k = i + 1 < W ? i + 1 : 0;
     const float a = r0[i], b = r0[k], c = r1[i], d = r1[k];
     best = std::max(best, std::max({a, b, c, d}) - std::min({a, b, c, d}));
@@ -104,7 +104,7 @@ float maxCellDelta(const HeightMap& m) {
   return tbb::parallel_reduce(
       tbb::blocked_range<int>(0, m.height(), 16), 0.0f,
       [&](const tbb::blocked_range<int>& r, float best) {
-        for (int j = r.begin(); j != r.end(); ++j) best = std::max(best, cellRowDelta(m, j));
+        for (int j = r.begin(); j != r.end(); ++j) best = std::max(best, cellRowDelta(m, j, 0, m.width()));
         return best;
       },
       [](float a, float b) { return std::max(a, b); });

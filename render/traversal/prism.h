@@ -86,8 +86,8 @@ struct PrismParams {
 // maxCellDelta: the largest (max − min) of the four corner texels of any grid cell of
 // the map (raw units): how much the micro-geometry's height varies within one cell.
 float maxCellDelta(const HeightMap& m);
-// The same per cell row: out[j] for the cells of row j (samples rows j and j+1, wrapped).
-float cellRowDelta(const HeightMap& m, int j);
+// The same over the cells [i0, i1) of row j (sample rows j and j+1, columns wrapped).
+float cellRowDelta(const HeightMap& m, int j, int i0, int i1);
 
 PrismParams analyzeShell(const DisplacedTriangle& T, const Displacement& d, const Interval& heights,
                          float maxCellDelta);

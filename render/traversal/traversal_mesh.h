@@ -7,6 +7,9 @@
 #include "render/intersector.h"
 #include "render/traversal/constants.h"
 #include "render/traversal/prism.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include "render/traversal/psi.h"
 
 #include <limits>
@@ -109,7 +112,11 @@ struct TraversalMesh {
   std::vector<double> budgetPad;  // RayMargins::boxPad for an origin at the budget
   Displacement disp;
   float cellDelta = 0;  // maxCellDelta(map)
-  std::vector<float> rowDelta;  // cellRowDelta(map, j) per cell row: cellDelta after an edit
+  // cellRowDelta per cell row and block of kDeltaBlock columns, and per row: an edit
+  // rescans only its blocks, then takes the maxima (cellDelta after an edit).
+  static constexpr int kDeltaBlock = 256;
+  int deltaBlocks = 0;
+  std::vector<float> blockDelta, rowDelta;
   std::vector<Interval> lastHeights;  // each prism's heights (range query over T's uv box)
 
   // Builds the per-triangle constants; heights(T) is [hmin, hmax] over T's uv box.
@@ -122,12 +129,20 @@ struct TraversalMesh {
   std::vector<uint32_t> update(const SampleRange& changed, Heights&& heights);
   template <typename Heights>
   void buildTriangle(size_t i, Heights&& heights);
+  // Recomputes blocks [b0, b1) of cell row j, then the row's maximum.
+  void rowDeltaOf(int j, int b0, int b1) {
+    const int W = disp.map->width();
+    float* blocks = blockDelta.data() + size_t(j) * deltaBlocks;
+    for (int b = b0; b < b1; ++b)
+      blocks[b] = cellRowDelta(*disp.map, j, b * kDeltaBlock, std::min(W, (b + 1) * kDeltaBlock));
+    rowDelta[size_t(j)] = *std::max_element(blocks, blocks + deltaBlocks);
+  }
   size_t bytes() const {
     return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
            cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
            prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
            (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB) +
-           rowDelta.capacity() * sizeof(float) + lastHeights.capacity() * sizeof(Interval);
+           (blockDelta.capacity() + rowDelta.capacity()) * sizeof(float) + lastHeights.capacity() * sizeof(Interval);
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
@@ -156,8 +171,13 @@ template <typename Heights>
 void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displacement& d, Heights&& heights) {
   tris = std::move(triangles);
   disp = d;
-  rowDelta.resize(size_t(d.map->height()));
-  for (int j = 0; j < d.map->height(); ++j) rowDelta[size_t(j)] = cellRowDelta(*d.map, j);
+  const int W = d.map->width(), H = d.map->height();
+  deltaBlocks = (W + kDeltaBlock - 1) / kDeltaBlock;
+  blockDelta.resize(size_t(H) * deltaBlocks);
+  rowDelta.resize(size_t(H));
+  tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& rows) {
+    for (int j = rows.begin(); j != rows.end(); ++j) rowDeltaOf(j, 0, deltaBlocks);
+  });
   cellDelta = rowDelta.empty() ? 0.0f : *std::max_element(rowDelta.begin(), rowDelta.end());
   params.resize(tris.size());
   cells.resize(tris.size());
@@ -198,12 +218,20 @@ void TraversalMesh::buildTriangle(size_t i, Heights&& heights) {
 template <typename Heights>
 std::vector<uint32_t> TraversalMesh::update(const SampleRange& changed, Heights&& heights) {
   const HeightMap& m = *disp.map;
-  const int H = m.height();
-  // Cell rows y0-1 .. y1 hold the edited sample rows.
+  const int H = m.height(), W = m.width();
+  // Cells y0-1 .. y1 and x0-1 .. x1 hold the edited samples: their rows' blocks.
   const int rows = int(std::min<int64_t>(int64_t(changed.y1) - changed.y0 + 2, H));
+  const int cols = int(std::min<int64_t>(int64_t(changed.x1) - changed.x0 + 2, W));
+  const int c0 = HeightMap::wrap(changed.x0 - 1, W), c1 = c0 + cols - 1;  // c1 may pass W: wrap
+  const bool allBlocks = cols >= W;
   for (int r = 0; r < rows; ++r) {
     const int j = HeightMap::wrap(changed.y0 - 1 + r, H);
-    rowDelta[size_t(j)] = cellRowDelta(m, j);
+    if (allBlocks || c1 >= W) {
+      rowDeltaOf(j, allBlocks ? 0 : c0 / kDeltaBlock, deltaBlocks);
+      if (!allBlocks) rowDeltaOf(j, 0, (c1 - W) / kDeltaBlock + 1);
+    } else {
+      rowDeltaOf(j, c0 / kDeltaBlock, c1 / kDeltaBlock + 1);
+    }
   }
   const float delta = *std::max_element(rowDelta.begin(), rowDelta.end());
   const bool all = delta != cellDelta;
