@@ -35,6 +35,7 @@
 
 #include <bit>
 #include <cstdint>
+#include <cstring>
 #include <span>
 
 namespace oblong {
@@ -95,7 +96,9 @@ class Rmip final : public RangeQueryImpl<Rmip> {
   // range re-encodes everything over the new range.
   void update(const SampleRange& changed) override;
 
-  std::span<const std::byte> storage() const override { return std::as_bytes(words()); }
+  std::span<const std::byte> storage() const override {
+    return bits_ == 16 ? std::as_bytes(std::span(q16_.data(), q16_.size())) : std::as_bytes(std::span(f32_.data(), f32_.size()));
+  }
 
   int downsample() const { return f_; }  // samples per RMIP pixel, per axis
   int resolutionX() const { return rw_; }
@@ -110,12 +113,16 @@ class Rmip final : public RangeQueryImpl<Rmip> {
   // Read-only view of the built pyramid, for copies of it (the Vulkan upload,
   // render/vulkan/rmip_layout.h) and bit-for-bit comparisons: the layer table, (p, q) at
   // index p * layersY() + q, and the entries its offsets point into, as 32-bit words
-  // (bits 16: one word per entry; bits 32: the float bits of lo, then hi).
+  // (bits 16: one word per entry; bits 32: the float bits of lo, then hi): storage()'s
+  // bytes, copied out (the float pairs are not read through another type).
   const std::vector<Layer>& layerTable() const { return layers_; }
-  std::span<const uint32_t> words() const {
-    if (bits_ == 16) return {q16_.data(), q16_.size()};
-    return {reinterpret_cast<const uint32_t*>(f32_.data()), f32_.size() * 2};
+  std::vector<uint32_t> words() const {
+    const std::span<const std::byte> b = storage();
+    std::vector<uint32_t> w(b.size() / sizeof(uint32_t));
+    if (!w.empty()) std::memcpy(w.data(), b.data(), w.size() * sizeof(uint32_t));
+    return w;
   }
+  size_t wordCount() const { return storage().size() / sizeof(uint32_t); }
 
   Interval rawRangeFast(const SampleRange& r) const {
     return bits_ == 16 ? q_.decodePair(rangeT(q16_.data(), r)) : rangeT(f32_.data(), r);

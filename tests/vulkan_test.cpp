@@ -165,7 +165,7 @@ TEST_CASE("vulkan: the GPU's RMIP layout answers every query as Rmip", "[vulkan]
         const Rmip rq(d, needs, o);
         const std::string compression = rq.describe().at("layout").dump();
         const vk::RmipLayout L = vk::RmipLayout::of(rq);
-        REQUIRE(L.words.size() == rq.words().size());
+        REQUIRE(L.words.size() == rq.wordCount());
         std::mt19937 rng(7);
         const int W = d.map->width(), H = d.map->height();
         std::uniform_int_distribution<int> x(-W, 2 * W), y(-H, 2 * H), ex(0, W + 2), ey(0, H + 2);

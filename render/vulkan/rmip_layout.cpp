@@ -32,12 +32,11 @@ RmipLayout RmipLayout::of(const Rmip& rmip) {
   const std::vector<Rmip::Layer>& table = rmip.layerTable();
   if (table.size() != size_t(L.P + 1) * size_t(L.Q + 1))
     fail("--device vulkan", "internal: rmip layer table has {} layers, expected {}x{}", table.size(), L.P + 1, L.Q + 1);
-  const std::span<const uint32_t> words = rmip.words();
-  if (words.size() > size_t(INT32_MAX))
-    fail("--device vulkan", "rmip: {} words exceed the 32-bit offsets of the GPU layout", words.size());
+  if (rmip.wordCount() > size_t(INT32_MAX))
+    fail("--device vulkan", "rmip: {} words exceed the 32-bit offsets of the GPU layout", rmip.wordCount());
   L.layers.reserve(table.size());
   for (const Rmip::Layer& l : table) L.layers.emplace_back(int(l.offset), l.nx, l.shiftX, l.shiftY);
-  L.words.assign(words.begin(), words.end());
+  L.words = rmip.words();
   return L;
 }
 
