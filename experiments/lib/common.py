@@ -485,14 +485,7 @@ def _first_line(cmd: list) -> str:
 
 
 def machine_info() -> dict:
-    cpu = "?"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = runstore.cpu_model()
     mem = "?"
     try:
         for line in open("/proc/meminfo"):

@@ -85,15 +85,19 @@ def describe_shard(s: str) -> str:
     return f"{g}, round {r + 1}"
 
 
-def node_info() -> dict:
-    cpu = "?"
+def cpu_model() -> str:
+    """The CPU's model name from /proc/cpuinfo ("?" where it cannot be read)."""
     try:
         for line in open("/proc/cpuinfo"):
             if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
+                return line.split(":", 1)[1].strip()
     except OSError:
         pass
+    return "?"
+
+
+def node_info() -> dict:
+    cpu = cpu_model()
     job = os.environ.get("SLURM_ARRAY_JOB_ID")
     task = os.environ.get("SLURM_ARRAY_TASK_ID")
     return {"host": socket.gethostname() or platform.node(), "cpu": cpu,
