@@ -18,6 +18,13 @@ using glm::vec3;
 using glm::vec4;
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+// v rounded to float, per component. Out of line on purpose: GCC 12.2's SLP vectorizer
+// (-O2 and up, x86-64) drops the rounding of a vectorised double -> float conversion
+// when the result is converted back to double in the same function, so
+// `dvec3(vec3(d))` can come out as d (wrong code, seen on glm vectors; reproduced
+// standalone). Code that reads back a rounded value calls this.
+[[gnu::noinline]] vec3 roundToFloat(const dvec3& v);
 // Largest scene coordinate (positions, displaced points, ray origins): the traversal
 // multiplies up to three coordinates in float, and 2^120 stays below float's 2^128.
 constexpr float kMaxCoordinate = 1099511627776.0f;  // 2^40

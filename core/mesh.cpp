@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -185,11 +186,21 @@ void transformMesh(Mesh& m, const glm::mat4& transform) {
   const float det = glm::determinant(l);
   if (!(det != 0.0f) || !std::isfinite(det)) fail(m.name, "transform is singular or not finite");
   const glm::mat3 normalMatrix = glm::inverseTranspose(l);
+  // The translation goes to the frame's origin, not into the positions: a mesh moved far
+  // away keeps the float positions (and so the micro-geometry) it has at the origin.
+  const vec3 translation(transform[3]);
+  if (!std::isfinite(translation.x) || !std::isfinite(translation.y) || !std::isfinite(translation.z))
+    fail(m.name, "transform produces a non-finite position");
   for (vec3& p : m.positions) {
-    const vec4 q = transform * vec4(p, 1.0f);
-    p = vec3(q) / q.w;
+    p = l * p;
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       fail(m.name, "transform produces a non-finite position");
+  }
+  const dvec3 o = dvec3(m.origin) + dvec3(translation);
+  m.origin = roundToFloat(o);
+  if (dvec3(m.origin) != o) {  // not a float: keep the world positions, move the rest
+    const dvec3 rest = o - dvec3(m.origin);
+    for (vec3& p : m.positions) p = vec3(dvec3(p) + rest);
   }
   for (vec3& n : m.normals) n = glm::normalize(normalMatrix * n);
   // A mirroring transform flips the geometric normal (cross product) against the vertex
@@ -265,7 +276,7 @@ void finishMesh(Mesh& m, const MeshLoadOptions& opts) {
   // The traversal multiplies up to three coordinates in float (kMaxCoordinate).
   for (const glm::uvec3& f : m.triangles)
     for (int c = 0; c < 3; ++c) {
-      const vec3& p = m.positions[f[c]];
+      const vec3 p(m.world(f[c]));
       if (!(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= kMaxCoordinate))
         fail(m.name, "vertex {} at ({}, {}, {}){} lies beyond the supported coordinate range (|x|, |y|, |z| <= 2^40 = "
                      "{:.4g})",
@@ -274,6 +285,26 @@ void finishMesh(Mesh& m, const MeshLoadOptions& opts) {
   if (skipped > 0 && opts.warn)
     fmt::print(stderr, "oblong: warning: {}: skipped {} of {} triangles as degenerate ({}; first: triangle {})\n",
                m.name, skipped, total, detail, first);
+  recentreMesh(m);
+}
+
+void recentreMesh(Mesh& m) {
+  dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  for (const glm::uvec3& f : m.triangles)
+    for (int c = 0; c < 3; ++c) lo = glm::min(lo, dvec3(m.positions[f[c]])), hi = glm::max(hi, dvec3(m.positions[f[c]]));
+  if (!(lo.x <= hi.x)) return;
+  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  const dvec3 centre = 0.5 * (lo + hi);
+  const double far = std::max({std::abs(centre.x), std::abs(centre.y), std::abs(centre.z)});
+  if (!(far > extent) || !(extent > 0.0)) return;
+  // A multiple of a power of two no larger than the extent: the positions minus it are
+  // exact in float (they keep their own bits and shrink to the extent's magnitude).
+  const double grid = std::exp2(std::floor(std::log2(extent)));
+  const dvec3 shift = glm::round(centre / grid) * grid;
+  const dvec3 o = dvec3(m.origin) + shift;
+  m.origin = roundToFloat(o);
+  const dvec3 moved = dvec3(m.origin) - (o - shift);  // what the origin actually moved by
+  for (vec3& p : m.positions) p = vec3(dvec3(p) - moved);
 }
 
 Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {

@@ -353,7 +353,7 @@ void checkDisplacement(const Reader& r, const Mesh& mesh, const Displacement& d)
   double maxP = 0.0;
   for (const glm::uvec3& f : mesh.triangles)
     for (int k = 0; k < 3; ++k)
-      for (int a = 0; a < 3; ++a) maxP = std::max(maxP, double(std::abs(mesh.positions[f[k]][a])));
+      for (int a = 0; a < 3; ++a) maxP = std::max(maxP, std::abs(mesh.world(f[k])[a]));
   const double maxH = std::max(std::abs(lo), std::abs(hi));
   if (!(maxP + maxH <= double(kMaxCoordinate)))
     r.errorAt("displacement.scale",

@@ -4,6 +4,8 @@
 
 namespace oblong {
 
+vec3 roundToFloat(const dvec3& v) { return vec3(float(v.x), float(v.y), float(v.z)); }
+
 namespace {
 // min over s in [0,1] of |a + s (b - a)|^2
 double minOnSegment2(const dvec3& a, const dvec3& b) {

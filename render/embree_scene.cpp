@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/microgeometry.h"
+#include "render/traversal/prism.h"
 #include "render/traversal/traversal.h"
 
 #include <tbb/parallel_for.h>
@@ -196,9 +197,20 @@ struct Context {
   RayCounters* counters;
 };
 
+// A ray in the mesh's frame: the origin minus the frame's, rounded once (exact when the
+// two are within a factor 2^29 of each other; the direction and t are unchanged).
+Ray toFrame(const Ray& r, const dvec3& origin) {
+  return Ray{vec3(dvec3(r.o) - origin), r.d, r.tmin, r.tmax};
+}
+
 void userBounds(const RTCBoundsFunctionArguments* args) {
-  const auto* is = static_cast<const Intersector*>(args->geometryUserPtr);
-  const AABB b = is->bounds(args->primID);
+  const auto* ug = static_cast<const EmbreeUserGeometry*>(args->geometryUserPtr);
+  AABB b = ug->intersector->bounds(args->primID);
+  if (!b.isEmpty()) {  // into the world, padded for Embree's box test (framePad)
+    BoxD w{dvec3(b.lo) + ug->origin, dvec3(b.hi) + ug->origin};
+    w.pad(framePad(b, vec3(ug->origin)));
+    b = w.toFloatOutward();
+  }
   RTCBounds* o = args->bounds_o;
   if (b.isEmpty()) {
     // Non-finite bounds make Embree drop the primitive (undisplaceable triangle).
@@ -217,20 +229,23 @@ void userIntersect(const void* argsPtr) {
   using Args = std::conditional_t<Occluded, RTCOccludedFunctionNArguments, RTCIntersectFunctionNArguments>;
   const Args* args = static_cast<const Args*>(argsPtr);
   if (!args->valid[0]) return;
-  const auto* is = static_cast<const Intersector*>(args->geometryUserPtr);
+  const auto* ug = static_cast<const EmbreeUserGeometry*>(args->geometryUserPtr);
+  const Intersector* is = ug->intersector;
   auto* ctx = reinterpret_cast<Context*>(args->context);
   RayCounters local;
   RayCounters& c = ctx->counters ? *ctx->counters : local;
   if constexpr (Occluded) {
     RTCRay* ray = reinterpret_cast<RTCRay*>(args->ray);
-    Ray r{vec3(ray->org_x, ray->org_y, ray->org_z), vec3(ray->dir_x, ray->dir_y, ray->dir_z), ray->tnear,
-          ray->tfar};
+    const Ray r = toFrame(Ray{vec3(ray->org_x, ray->org_y, ray->org_z), vec3(ray->dir_x, ray->dir_y, ray->dir_z),
+                              ray->tnear, ray->tfar},
+                          ug->origin);
     TriangleHit h;
     if (is->intersect(r, args->primID, h, c)) ray->tfar = -kInfinity;
   } else {
     RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
-    Ray r{vec3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z), vec3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z),
-          rh->ray.tnear, rh->ray.tfar};
+    const Ray r = toFrame(Ray{vec3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z),
+                              vec3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z), rh->ray.tnear, rh->ray.tfar},
+                          ug->origin);
     TriangleHit h;
     if (!is->intersect(r, args->primID, h, c) || !(h.t < rh->ray.tfar)) return;
     rh->ray.tfar = h.t;
@@ -371,7 +386,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
     g->mesh = int(mi);
     baseTriangles_ += mesh.triangles.size();
     if (!sm.displacement) {
-      for (const vec3& p : mesh.positions) g->vertices.emplace_back(p, 0.0f);
+      for (size_t v = 0; v < mesh.positions.size(); ++v) g->vertices.emplace_back(vec3(mesh.world(v)), 0.0f);
       g->indices = mesh.triangles;
       g->uvs = mesh.hasUVs() ? mesh.uvs : std::vector<vec2>(mesh.positions.size(), vec2(0.0f));
     } else if (!opts.tessellate) {
@@ -381,7 +396,8 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
       traversalName_ = g->intersector->name();
       RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
       rtcSetGeometryUserPrimitiveCount(geom, unsigned(g->intersector->size()));
-      rtcSetGeometryUserData(geom, g->intersector.get());
+      g->user = {g->intersector.get(), dvec3(mesh.origin)};
+      rtcSetGeometryUserData(geom, &g->user);
       rtcSetGeometryBoundsFunction(geom, userBounds, nullptr);
       rtcSetGeometryIntersectFunction(geom, [](const RTCIntersectFunctionNArguments* a) { userIntersect<false>(a); });
       rtcSetGeometryOccludedFunction(geom, [](const RTCOccludedFunctionNArguments* a) { userIntersect<true>(a); });
@@ -408,7 +424,8 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
       for (size_t ti = 0; ti < patches.size(); ++ti) {
         const uint32_t base = uint32_t(g->vertices.size());
         Patch& p = patches[ti];
-        g->vertices.insert(g->vertices.end(), p.vertices.begin(), p.vertices.end());
+        // Built in the mesh's frame, traced by Embree in the world (rounded once).
+        for (const vec4& v : p.vertices) g->vertices.emplace_back(vec3(dvec3(vec3(v)) + dvec3(mesh.origin)), 0.0f);
         g->uvs.insert(g->uvs.end(), p.uvs.begin(), p.uvs.end());
         for (const auto& t : p.indices) g->indices.push_back(t + base);
         g->basePrim.insert(g->basePrim.end(), p.indices.size(), uint32_t(ti));

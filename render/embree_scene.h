@@ -59,6 +59,13 @@ TessellationEstimate estimateTessellation(const Mesh& mesh, const Displacement& 
 // (patches with their vertex tables, the concatenated buffers, Embree's build).
 size_t tessellationPeakBytes(const std::vector<TessellationEstimate>& meshes, size_t threads);
 
+// What a displaced mesh's user-geometry callbacks need: its intersector, which works in
+// the mesh's frame (Mesh::origin), and the frame's origin.
+struct EmbreeUserGeometry {
+  const Intersector* intersector = nullptr;
+  dvec3 origin{0.0};
+};
+
 class EmbreeScene {
  public:
   EmbreeScene(const Scene& scene, const AccelOptions& opts);
@@ -104,6 +111,7 @@ class EmbreeScene {
     std::vector<vec2> uvs;            // per vertex
     std::vector<uint32_t> basePrim;   // micro-triangle -> base triangle (displaced only)
     std::unique_ptr<Intersector> intersector;  // displaced meshes as user geometry
+    EmbreeUserGeometry user;  // what its callbacks get
   };
   void build(const Scene& scene, const AccelOptions& opts);
   void release();

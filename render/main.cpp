@@ -198,8 +198,9 @@ void warnBoxOnly(const Scene& scene, const EmbreeScene& accel) {
     const size_t boxOnly = p.built - p.wellPosed;
     if (boxOnly == 0) continue;
     fmt::print(stderr,
-               "oblong: warning: {}: meshes[{}]: {} of {} prisms are box-only (no projection bounds: the triangle is "
-               "too far from the origin for its size, or too thin), which makes them much slower to trace\n",
+               "oblong: warning: {}: meshes[{}]: {} of {} prisms are box-only (no projection bounds: the normals "
+               "converge within the displacement, or the triangle is too thin or too far from its mesh's centre "
+               "for its size), which makes them much slower to trace\n",
                scene.path, p.mesh, boxOnly, p.built);
   }
 }

@@ -70,7 +70,7 @@ inline vec2 baryOfPoint(const DisplacedTriangle& T, const vec3& p) {
 inline float sceneDiagonal(const Scene& s) {
   AABB b;
   for (const auto& sm : s.meshes)
-    for (const vec3& p : sm.mesh.positions) b.extend(p);
+    for (size_t v = 0; v < sm.mesh.positions.size(); ++v) b.extend(vec3(sm.mesh.world(v)));
   return b.isEmpty() ? 1.0f : glm::length(b.extent());
 }
 

@@ -152,9 +152,11 @@ TEST_CASE("transforms move positions and normals (inverse transpose)", "[mesh]")
   const glm::mat4 T = glm::translate(glm::mat4(1.0f), vec3(1, 2, 3)) * glm::scale(glm::mat4(1.0f), vec3(2, 1, 1));
   const Mesh m = loadMesh(path, {T, false});
   REQUIRE(m.positions.size() == base.positions.size());
+  CHECK(m.origin == vec3(1, 2, 3));  // the translation is the frame's, not the positions'
   for (size_t v = 0; v < m.positions.size(); ++v) {
     const vec3 p = base.positions[v];
-    CHECK(near(m.positions[v], vec3(2 * p.x + 1, p.y + 2, p.z + 3)));
+    CHECK(m.positions[v] == vec3(2 * p.x, p.y, p.z));
+    CHECK(near(vec3(m.world(v)), vec3(2 * p.x + 1, p.y + 2, p.z + 3)));
     if (near(base.normals[v], glm::normalize(vec3(-2, 0, 1))))
       CHECK(near(m.normals[v], glm::normalize(vec3(-1, 0, 1))));
     CHECK(glm::length(m.normals[v]) == Approx(1.0f));
@@ -626,4 +628,34 @@ TEST_CASE("inputTriangle maps triangles back to the numbering of the warning lin
   REQUIRE(m.triangles.size() == 3);
   CHECK(m.inputTriangle == std::vector<uint32_t>{0, 2, 4});
   CHECK(m.bytes() == m.positions.size() * 2 * sizeof(vec3) + 3 * sizeof(glm::uvec3) + 3 * sizeof(uint32_t));
+}
+
+TEST_CASE("a mesh far from the origin gets its own frame: same positions wherever it sits", "[mesh]") {
+  const auto path = writeFile("tent_far.obj", kTent);
+  const Mesh base = loadMesh(path);
+  for (const double d : {1e2, 1e4, 1e6}) {
+    CAPTURE(d);
+    const vec3 t(float(d), float(-d), float(d));
+    const Mesh m = loadMesh(path, {glm::translate(glm::mat4(1.0f), t), false});
+    CHECK(m.origin == t);
+    CHECK(m.positions == base.positions);  // bit for bit
+    for (size_t v = 0; v < m.positions.size(); ++v) CHECK(m.world(v) == dvec3(t) + dvec3(base.positions[v]));
+  }
+  // A mesh whose own coordinates lie far away is recentred: the move is exact (a
+  // multiple of a power of two below the mesh's size) and the world positions stay.
+  Mesh far = base;
+  for (vec3& p : far.positions) p += vec3(3e5f, 0.0f, -7e5f);
+  const Mesh kept = far;
+  recentreMesh(far);
+  CHECK(far.origin != vec3(0.0f));
+  float extent = 0;
+  for (size_t v = 0; v < far.positions.size(); ++v) {
+    CHECK(far.world(v) == kept.world(v));
+    extent = std::max({extent, std::abs(far.positions[v].x), std::abs(far.positions[v].z)});
+  }
+  CHECK(extent < 10.0f);
+  Mesh near0 = base;
+  recentreMesh(near0);  // already around the origin: unchanged
+  CHECK(near0.origin == vec3(0.0f));
+  CHECK(near0.positions == base.positions);
 }

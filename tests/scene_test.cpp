@@ -91,14 +91,14 @@ TEST_CASE("a valid scene round trip", "[scene]") {
   // Scale 2, then 90 degrees about z, then translate: (1,0,0) -> (2,0,0) -> (0,2,0) -> (10,2,0).
   for (size_t v = 0; v < a.mesh.positions.size(); ++v) {
     const vec3 p = s.meshes[2].mesh.positions[v];  // untransformed copy
-    CHECK(near(a.mesh.positions[v], vec3(10 - 2 * p.y, 2 * p.x, 2 * p.z)));
+    CHECK(near(vec3(a.mesh.world(v)), vec3(10 - 2 * p.y, 2 * p.x, 2 * p.z)));
     CHECK(near(a.mesh.normals[v], vec3(0, 0, 1)));
   }
   // Row-major matrix: x' = 2x + 1.
   const SceneMesh& b = s.meshes[1];
   for (size_t v = 0; v < b.mesh.positions.size(); ++v) {
     const vec3 p = s.meshes[2].mesh.positions[v];
-    CHECK(near(b.mesh.positions[v], vec3(2 * p.x + 1, p.y, p.z)));
+    CHECK(near(vec3(b.mesh.world(v)), vec3(2 * p.x + 1, p.y, p.z)));
   }
   CHECK(b.displacement->tiling == vec2(4, 4));
   CHECK(b.albedo == vec3(0.7f));  // default
@@ -186,7 +186,8 @@ TEST_CASE("procedural shapes stand in for mesh files", "[scene]") {
 
   const Mesh& sphere = s.meshes[1].mesh;
   CHECK(sphere.triangles.size() == 2 * 8 * 3);
-  for (const vec3& p : sphere.positions) CHECK(glm::length(p - vec3(0, 5, 0)) == Approx(2.0f).epsilon(1e-6));
+  for (size_t v = 0; v < sphere.positions.size(); ++v)
+    CHECK(glm::length(vec3(sphere.world(v)) - vec3(0, 5, 0)) == Approx(2.0f).epsilon(1e-6));
   CHECK(s.meshes[2].mesh.triangles.size() == 2 * 6 * 6);
   CHECK(s.meshes[3].mesh.triangles.size() == 2);
 }

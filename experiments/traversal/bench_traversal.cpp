@@ -5,7 +5,12 @@
 // scene, side by side in one run. Counters: Mrays/s (per core), steps per ray (boxes + marched cells,
 // as the RMIP paper counts them), acceleration-structure memory (MB).
 //
-//   ./build/bench_traversal [--scene scenes/asteroid.json] [--size 256x192]
+// A second ray family, `grazing/...`: rays within 0.5-6 degrees of the base surface at
+// random points of the displaced meshes, aimed at a random height of the shell from
+// half a scene diagonal away (--grazing N rays, default 20000, seed fixed), with the
+// canonical configuration at marching scales 1 and 2 beside the others.
+//
+//   ./build/bench_traversal [--scene scenes/asteroid.json] [--size 256x192] [--grazing N]
 //       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //       --benchmark_out=out.json --benchmark_out_format=json
 //   /usr/bin/python3 experiments/traversal/summarize.py out.json
@@ -21,6 +26,7 @@
 #include <fmt/format.h>
 
 #include <cstring>
+#include <random>
 #include <map>
 #include <memory>
 
@@ -30,6 +36,7 @@ namespace {
 
 std::string gScene;  // empty: the built-in default scene
 ivec2 gSize{256, 192};
+int gGrazing = 20000;
 
 const Scene& scene() {
   static Scene s = gScene.empty() ? defaultScene() : loadScene(gScene);
@@ -42,6 +49,47 @@ const std::vector<Ray>& primaryRays() {
     std::vector<Ray> r;
     for (int y = 0; y < gSize.y; ++y)
       for (int x = 0; x < gSize.x; ++x) r.push_back(cam.generate(x + 0.5f, y + 0.5f));
+    return r;
+  }();
+  return rays;
+}
+
+// Rays within [0.5, 6] degrees of the base surface (DESIGN §1's P and N), descending
+// towards a random height of the shell, starting half a scene diagonal before it.
+const std::vector<Ray>& grazingRays() {
+  static std::vector<Ray> rays = [] {
+    const Scene& s = scene();
+    AABB box;
+    std::vector<const SceneMesh*> displaced;
+    for (const SceneMesh& sm : s.meshes) {
+      for (size_t v = 0; v < sm.mesh.positions.size(); ++v) box.extend(vec3(sm.mesh.world(v)));
+      if (sm.displacement) displaced.push_back(&sm);
+    }
+    std::vector<Ray> r;
+    if (displaced.empty()) return r;
+    const float diag = glm::length(box.extent());
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> U(0.0f, 1.0f);
+    constexpr float kDeg = 3.14159265f / 180.0f;
+    while (int(r.size()) < gGrazing) {
+      const SceneMesh& sm = *displaced[size_t(U(rng) * float(displaced.size())) % displaced.size()];
+      const DisplacedTriangle T = sm.mesh.triangle(size_t(U(rng) * float(sm.mesh.triangles.size())) %
+                                                   sm.mesh.triangles.size());
+      if (T.uvArea2 == 0.0f) continue;
+      float u = U(rng), v = U(rng);
+      if (u + v > 1) u = 1 - u, v = 1 - v;
+      const vec3 n = glm::normalize(T.N(u, v));
+      vec3 t = glm::cross(n, glm::normalize(vec3(U(rng), U(rng), U(rng)) - 0.5f));
+      if (!(glm::length(t) > 1e-3f)) continue;
+      t = glm::normalize(t);
+      const Displacement& d = *sm.displacement;
+      const Interval raw = d.map->range();
+      const float h0 = d.scale * (raw.lo + d.bias), h1 = d.scale * (raw.hi + d.bias);
+      const float h = h0 + U(rng) * (h1 - h0), a = (0.5f + 5.5f * U(rng)) * kDeg;
+      const vec3 q = vec3(dvec3(T.P(u, v) + h * n) + dvec3(sm.mesh.origin));
+      const vec3 dir = std::cos(a) * t - std::sin(a) * n;
+      r.push_back(Ray{q - 0.5f * diag * dir, dir, 0.0f, kInfinity});
+    }
     return r;
   }();
   return rays;
@@ -72,6 +120,11 @@ std::vector<Config> configs() {
   driver.traversal.inversionInTraversal = false;
   driver.traversal.marchingScale = 1.0f;
   c.push_back({"driver_mipmap", driver});
+  for (float ms : {1.0f, 2.0f}) {  // the marching scale against grazing rays
+    AccelOptions o;
+    o.traversal.marchingScale = ms;
+    c.push_back({fmt::format("canonical_march{}", ms), o});
+  }
   AccelOptions tess;
   tess.tessellate = true;
   c.push_back({"tessellated", tess});
@@ -85,9 +138,8 @@ const EmbreeScene& accel(const Config& c) {
   return *p;
 }
 
-void trace(benchmark::State& state, const Config& c) {
+void trace(benchmark::State& state, const Config& c, const std::vector<Ray>& rays) {
   const EmbreeScene& a = accel(c);
-  const auto& rays = primaryRays();
   RayCounters counters;
   int64_t hits = 0, passes = 0;
   for (auto _ : state) {
@@ -120,6 +172,7 @@ int main(int argc, char** argv) {
   std::vector<char*> rest{argv[0]};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--scene") && i + 1 < argc) gScene = argv[++i];
+    else if (!std::strcmp(argv[i], "--grazing") && i + 1 < argc) gGrazing = std::max(0, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--size") && i + 1 < argc) {
       if (std::sscanf(argv[++i], "%dx%d", &gSize.x, &gSize.y) != 2 || gSize.x <= 0 || gSize.y <= 0) {
         fmt::print(stderr, "bench_traversal: --size: expected WxH, got '{}'\n", argv[i]);
@@ -134,11 +187,16 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "bench_traversal: {}\n", e.what());
     return 1;
   }
-  for (const Config& c : configs())
-    benchmark::RegisterBenchmark(("primary/" + c.name).c_str(), [c](benchmark::State& s) { trace(s, c); })
-        ->Unit(benchmark::kMillisecond)
-        ->MeasureProcessCPUTime()
-        ->UseRealTime();
+  for (const char* family : {"primary", "grazing"})
+    for (const Config& c : configs()) {
+      if (!std::strcmp(family, "grazing") && gGrazing == 0) continue;
+      const bool primary = !std::strcmp(family, "primary");
+      benchmark::RegisterBenchmark((std::string(family) + "/" + c.name).c_str(),
+                                   [c, primary](benchmark::State& s) { trace(s, c, primary ? primaryRays() : grazingRays()); })
+          ->Unit(benchmark::kMillisecond)
+          ->MeasureProcessCPUTime()
+          ->UseRealTime();
+    }
   benchmark::Initialize(&n, rest.data());
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -3,6 +3,7 @@
 // by the same createIntersector call that EmbreeScene makes, so both paths start from
 // identical numbers; the RMIP layers are the CPU traversal's own Rmip, copied as they are.
 #include "render/vulkan/records.h"
+#include "render/traversal/prism.h"
 
 #include "core/error.h"
 #include "render/traversal/traversal.h"
@@ -19,7 +20,7 @@ using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 32 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1112 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 104 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 120 && sizeof(PushGpu) == 16);
 static_assert(sizeof(Ray) == 32 && offsetof(Ray, d) == offsetof(RayGpu, d) && offsetof(Ray, tmin) == offsetof(RayGpu, tmin) &&
                   offsetof(Ray, tmax) == offsetof(RayGpu, tmax),
               "RayGpu mirrors oblong::Ray: ray buffers are copied as is");
@@ -115,6 +116,7 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
     const SceneMesh& sm = scene.meshes[mi];
     const Mesh& mesh = sm.mesh;
     MeshGpu& m = meshes[mi];
+    m.originX = mesh.origin.x, m.originY = mesh.origin.y, m.originZ = mesh.origin.z;
     R.baseTriangles += mesh.triangles.size();
     if (!sm.displacement) {
       m.indexOffset = uint32_t(plainIndex.size());
@@ -156,11 +158,15 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
     R.texelBytes += d.map->bytes();
     for (size_t ti = 0; ti < tm.tris.size(); ++ti) {
       tris.push_back(makeTri(tm, ti));
-      const AABB b = is->bounds(uint32_t(ti));
+      AABB b = is->bounds(uint32_t(ti));
       AabbGpu a;
       if (b.isEmpty()) {  // inactive (NaN min x): the triangle cannot be displaced
         a = {{std::nanf(""), 0, 0}, {0, 0, 0}};
       } else {
+        // In the mesh's frame, padded as the CPU pads its world boxes (framePad).
+        BoxD p{dvec3(b.lo), dvec3(b.hi)};
+        p.pad(framePad(b, mesh.origin));
+        b = p.toFloatOutward();
         a = {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}};
       }
       aabbs.push_back(a);

@@ -120,6 +120,8 @@ struct MeshGpu {
   int chunkShift;   // log2 of the elements per texel / RMIP buffer (OBLONG_CHUNKS)
   uint indexOffset;  // plain: first index (3 per triangle)
   uint vertexOffset; // plain: first vertex
+  float originX, originY, originZ;  // Mesh::origin: the instance's translation
+  float pad0;
 };
 
 // Intersection -> closest-hit attributes (displaced prisms).
