@@ -5,9 +5,8 @@
 // scene, side by side in one run. Counters: Mrays/s (per core), steps per ray (boxes + marched cells,
 // as the RMIP paper counts them), acceleration-structure memory (MB).
 //
-// A second ray family, `grazing/...`: rays within 0.5-6 degrees of the base surface at
-// random points of the displaced meshes, aimed at a random height of the shell from
-// half a scene diagonal away (--grazing N rays, default 20000, seed fixed), with the
+// A second ray family, `grazing/...` (grazing_rays.h: within 0.5-6 degrees of the base
+// surface, aimed into the shell; --grazing N rays, default 20000, 0 for none), with the
 // canonical configuration at marching scales 1 and 2 beside the others.
 //
 //   ./build/bench_traversal [--scene scenes/asteroid.json] [--size 256x192] [--grazing N]
@@ -21,12 +20,12 @@
 #include "core/scene.h"
 #include "render/camera.h"
 #include "render/embree_scene.h"
+#include "experiments/traversal/grazing_rays.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 
 #include <cstring>
-#include <random>
 #include <map>
 #include <memory>
 
@@ -54,44 +53,8 @@ const std::vector<Ray>& primaryRays() {
   return rays;
 }
 
-// Rays within [0.5, 6] degrees of the base surface (DESIGN §1's P and N), descending
-// towards a random height of the shell, starting half a scene diagonal before it.
-const std::vector<Ray>& grazingRays() {
-  static std::vector<Ray> rays = [] {
-    const Scene& s = scene();
-    AABB box;
-    std::vector<const SceneMesh*> displaced;
-    for (const SceneMesh& sm : s.meshes) {
-      for (size_t v = 0; v < sm.mesh.positions.size(); ++v) box.extend(vec3(sm.mesh.world(v)));
-      if (sm.displacement) displaced.push_back(&sm);
-    }
-    std::vector<Ray> r;
-    if (displaced.empty()) return r;
-    const float diag = glm::length(box.extent());
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<float> U(0.0f, 1.0f);
-    constexpr float kDeg = 3.14159265f / 180.0f;
-    while (int(r.size()) < gGrazing) {
-      const SceneMesh& sm = *displaced[size_t(U(rng) * float(displaced.size())) % displaced.size()];
-      const DisplacedTriangle T = sm.mesh.triangle(size_t(U(rng) * float(sm.mesh.triangles.size())) %
-                                                   sm.mesh.triangles.size());
-      if (T.uvArea2 == 0.0f) continue;
-      float u = U(rng), v = U(rng);
-      if (u + v > 1) u = 1 - u, v = 1 - v;
-      const vec3 n = glm::normalize(T.N(u, v));
-      vec3 t = glm::cross(n, glm::normalize(vec3(U(rng), U(rng), U(rng)) - 0.5f));
-      if (!(glm::length(t) > 1e-3f)) continue;
-      t = glm::normalize(t);
-      const Displacement& d = *sm.displacement;
-      const Interval raw = d.map->range();
-      const float h0 = d.scale * (raw.lo + d.bias), h1 = d.scale * (raw.hi + d.bias);
-      const float h = h0 + U(rng) * (h1 - h0), a = (0.5f + 5.5f * U(rng)) * kDeg;
-      const vec3 q = vec3(dvec3(T.P(u, v) + h * n) + dvec3(sm.mesh.origin));
-      const vec3 dir = std::cos(a) * t - std::sin(a) * n;
-      r.push_back(Ray{q - 0.5f * diag * dir, dir, 0.0f, kInfinity});
-    }
-    return r;
-  }();
+const std::vector<Ray>& grazing() {
+  static std::vector<Ray> rays = grazingRays(scene(), gGrazing);
   return rays;
 }
 
@@ -192,7 +155,7 @@ int main(int argc, char** argv) {
       if (!std::strcmp(family, "grazing") && gGrazing == 0) continue;
       const bool primary = !std::strcmp(family, "primary");
       benchmark::RegisterBenchmark((std::string(family) + "/" + c.name).c_str(),
-                                   [c, primary](benchmark::State& s) { trace(s, c, primary ? primaryRays() : grazingRays()); })
+                                   [c, primary](benchmark::State& s) { trace(s, c, primary ? primaryRays() : grazing()); })
           ->Unit(benchmark::kMillisecond)
           ->MeasureProcessCPUTime()
           ->UseRealTime();
