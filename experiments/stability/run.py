@@ -205,9 +205,17 @@ def quad(n, half=1.0, y=0.0, offset=(0, 0, 0), normals=None, uvmap=None):
 
 class Case:
     def __init__(self, name, what, tris=None, shape=None, disp=None, hmin=0.0, hmax=0.0, boundary_only=False,
-                 sphere=None):
+                 sphere=None, offset=None):
         self.name, self.what, self.tris, self.shape = name, what, tris, shape
         self.disp, self.hmin, self.hmax, self.boundary_only, self.sphere = disp, hmin, hmax, boundary_only, sphere
+        # offset: the mesh is written at the origin and moved by the scene's transform
+        # (its frame, docs/decisions.md "Mesh frames"); `tris` (for the rays) are the
+        # moved triangles in float64, `file_tris` what the OBJ holds.
+        self.offset, self.file_tris = offset, tris
+        if offset is not None:
+            import numpy as np
+            off = np.asarray(offset, "f8")
+            self.tris = [([np.asarray(p, "f8") + off for p in ps], ns, uvs) for ps, ns, uvs in tris]
 
 
 def cases():
@@ -226,9 +234,16 @@ def cases():
     def twisted_normals(k):
         return [f32(normalize([rng.uniform(-0.5, 0.5), 1.0, rng.uniform(-0.5, 0.5)])) for _ in range(k)]
 
+    twisted = quad(3, normals=twisted_normals)
+    twisted_disp = {"map": (48, 48, 7), "scale": 0.15, "bias": -0.5, "tiling": [2, 2]}
     out.append(Case("twisted", "quad 3×3, random vertex normals up to ~35° off (traversal_test)",
-                    tris=quad(3, normals=twisted_normals), disp={"map": (48, 48, 7), "scale": 0.15, "bias": -0.5,
-                                                                 "tiling": [2, 2]}, hmin=-0.075, hmax=0.075))
+                    tris=twisted, disp=twisted_disp, hmin=-0.075, hmax=0.075))
+    # The same scene moved through the scene transform: the traversal runs in the mesh's
+    # frame, so work and hits follow the untranslated case (steps_per_ray comparable).
+    for d in (1e2, 1e4, 1e6):
+        out.append(Case(f"twisted_moved_{d:.0e}", f"the twisted quad moved by ({d:.0e}, -{d:.0e}, {d:.0e}) "
+                        "through the scene transform", tris=twisted, disp=twisted_disp, hmin=-0.075, hmax=0.075,
+                        offset=(d, -d, d)))
     out.append(Case("deep_sphere", "sphere 10×6 displaced 0.6 of its radius inwards (normals converge in the shell)",
                     shape={"type": "sphere", "radius": 1, "segments": [10, 6]},
                     disp={"map": (64, 32, 5), "scale": 0.6, "bias": -1.0, "tiling": [2, 1]}, hmin=-0.6, hmax=0.0,
@@ -260,8 +275,10 @@ def write_case(ctx, case):
         mesh = {"shape": case.shape, "displacement": disp}
     else:
         obj = ctx.tmp("cases", f"{case.name}.obj")
-        write_obj(obj, case.tris)
+        write_obj(obj, case.file_tris)
         mesh = {"file": str(obj), "displacement": disp}
+        if case.offset is not None:
+            mesh["transform"] = {"translate": [float(x) for x in case.offset]}
     doc = {"meshes": [mesh]}
     base = ctx.write_scene(f"stiff_{case.name}", doc)
     low = dict(doc, strategies={"range": {"name": "rmip", "resolution": 8, "layout": "corners", "compression": 0}})
