@@ -43,43 +43,51 @@ struct RayMargins {
   }
 };
 
-// An oriented box in T's frame (edge, in-plane perpendicular, face normal) around the
-// six vertices of a prism, hence around the prism (a convex combination of them). Most
-// rays Embree hands over meet the world AABB of a tilted prism but miss the prism; this
-// slab test rejects them before the exact crossings (render/traversal/prism.cpp).
+// Slabs in T's frame around the six vertices of a prism, hence around the prism (a
+// convex combination of them): along the face normal and, in T's plane, along edge 0 and
+// perpendicular to each of the three edges — a box with its corners cut to T's shape.
+// Most rays Embree hands over meet the world AABB of a tilted prism but miss the prism;
+// this test rejects them before the exact crossings (render/traversal/prism.cpp).
 struct PrismOBB {
-  dvec3 axis[3]{dvec3(0.0), dvec3(0.0), dvec3(0.0)};
-  dvec3 lo{0.0}, hi{-1.0};  // in the axes' coordinates (relative to the world origin)
+  static constexpr int kAxes = 5;
+  dvec3 axis[kAxes]{dvec3(0.0), dvec3(0.0), dvec3(0.0), dvec3(0.0), dvec3(0.0)};
+  double lo[kAxes]{0, 0, 0, 0, 0}, hi[kAxes]{-1, -1, -1, -1, -1};  // relative to the world origin
 
   static PrismOBB around(const Prism& p, const DisplacedTriangle& T, double pad) {
     PrismOBB b;
     const dvec3 e = dvec3(T.p[1]) - dvec3(T.p[0]), f = dvec3(T.p[2]) - dvec3(T.p[0]);
     const dvec3 n = glm::cross(e, f);
     if (!(glm::length(n) > 0) || !(glm::length(e) > 0)) return b;  // empty: not used
+    const dvec3 un = glm::normalize(n);
     b.axis[0] = glm::normalize(e);
-    b.axis[2] = glm::normalize(n);
-    b.axis[1] = glm::cross(b.axis[2], b.axis[0]);
-    b.lo = dvec3(std::numeric_limits<double>::infinity());
-    b.hi = -b.lo;
+    b.axis[1] = glm::cross(un, b.axis[0]);
+    b.axis[2] = un;
+    for (int k = 1; k < 3; ++k) {  // the in-plane perpendiculars of edges 1 and 2
+      const dvec3 ek = dvec3(T.p[(k + 1) % 3]) - dvec3(T.p[k]);
+      const dvec3 m = glm::cross(un, ek);
+      b.axis[2 + k] = glm::length(m) > 0 ? glm::normalize(m) : b.axis[1];
+    }
     double mag = 0;
+    for (int a = 0; a < kAxes; ++a) b.lo[a] = std::numeric_limits<double>::infinity(), b.hi[a] = -b.lo[a];
     for (int k = 0; k < 6; ++k) {
       const dvec3 v = p.vertex(k % 3, k >= 3);
-      const dvec3 c(glm::dot(b.axis[0], v), glm::dot(b.axis[1], v), glm::dot(b.axis[2], v));
-      b.lo = glm::min(b.lo, c);
-      b.hi = glm::max(b.hi, c);
+      for (int a = 0; a < kAxes; ++a) {
+        const double c = glm::dot(b.axis[a], v);
+        b.lo[a] = std::min(b.lo[a], c);
+        b.hi[a] = std::max(b.hi[a], c);
+      }
       mag = std::max({mag, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
     }
     // The pad of the boxes, plus the rounding of these dot products here and per ray.
     const double r = pad + OBLONG_TRAV_OBB_ROUND * (mag + 1);
-    b.lo -= dvec3(r);
-    b.hi += dvec3(r);
+    for (int a = 0; a < kAxes; ++a) b.lo[a] -= r, b.hi[a] += r;
     return b;
   }
-  bool valid() const { return lo.x <= hi.x; }
-  // Clips [t0, t1] to the box (t0 > t1 when missed). `slack` covers this ray's own
+  bool valid() const { return lo[0] <= hi[0]; }
+  // Clips [t0, t1] to the slabs (t0 > t1 when missed). `slack` covers this ray's own
   // rounding (relative to its origin's magnitude).
   void clip(const dvec3& O, const dvec3& D, double slack, double& t0, double& t1) const {
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < kAxes && t0 <= t1; ++k) {
       const double o = glm::dot(axis[k], O), d = glm::dot(axis[k], D);
       const double l = lo[k] - slack, h = hi[k] + slack;
       if (d == 0.0) {

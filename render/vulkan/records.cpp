@@ -19,7 +19,7 @@ namespace oblong::vk {
 using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 32 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
-static_assert(sizeof(TriGpu) == 1112 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
+static_assert(sizeof(TriGpu) == 1192 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
 static_assert(sizeof(MeshGpu) == 120 && sizeof(PushGpu) == 16);
 static_assert(sizeof(Ray) == 32 && offsetof(Ray, d) == offsetof(RayGpu, d) && offsetof(Ray, tmin) == offsetof(RayGpu, tmin) &&
                   offsetof(Ray, tmax) == offsetof(RayGpu, tmax),
@@ -51,8 +51,8 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   g.boxPadLo = tm.prismBoxes[i].lo, g.boxPadHi = tm.prismBoxes[i].hi;
   g.infPadLo = tm.inflatedBoxes[i].lo, g.infPadHi = tm.inflatedBoxes[i].hi;
   const PrismOBB& obb = tm.obbs[i];
-  for (int k = 0; k < 3; ++k) g.obbAxis[k] = obb.axis[k];
-  g.obbLo = obb.lo, g.obbHi = obb.hi;
+  static_assert(PrismOBB::kAxes == 5);
+  for (int k = 0; k < PrismOBB::kAxes; ++k) g.obbAxis[k] = obb.axis[k], g.obbLo[k] = obb.lo[k], g.obbHi[k] = obb.hi[k];
   g.obbValid = obb.valid();
   g.budgetPad = tm.budgetPad[i];
   g.bc = F.bc, g.bX = F.bX, g.bY = F.bY, g.sc = F.sc, g.sU = F.sU, g.sV = F.sV;

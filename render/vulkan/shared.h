@@ -83,7 +83,8 @@ struct TriGpu {
   dvec3 boxLo, boxHi;       // exact prism box, unpadded (Prism::exact(T, a, b).bounds())
   dvec3 boxPadLo, boxPadHi; // TraversalMesh::prismBoxes (padded for origins within budget)
   dvec3 infPadLo, infPadHi; // TraversalMesh::inflatedBoxes (padded likewise; missesPrism)
-  dvec3 obbAxis[3], obbLo, obbHi;  // TraversalMesh::obbs (PrismOBB; missesPrism)
+  dvec3 obbAxis[5];          // TraversalMesh::obbs (PrismOBB: kAxes slabs; missesPrism)
+  double obbLo[5], obbHi[5];
   dvec2 bc, bX, bY;         // barycentrics (u, v) = bc + bX X + bY Y
   dvec2 sc, sU, sV;         // local sample coordinates (X, Y) = sc + sU u + sV v
   dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates

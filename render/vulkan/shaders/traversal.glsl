@@ -1106,7 +1106,7 @@ bool missesPrism() {
   if (!(t0 <= t1)) return true;
   if (TRI.obbValid == 0) return false;
   precise double slackO = OBLONG_TRAV_OBB_ROUND * (maxO + 1.0);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 5 && t0 <= t1; ++k) {
     dvec3 ax = TRI.obbAxis[k];
     double o = dotD(ax, g_O), d = dotD(ax, g_D);
     precise double l = TRI.obbLo[k] - slackO, h = TRI.obbHi[k] + slackO;
