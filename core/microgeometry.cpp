@@ -101,7 +101,7 @@ MicroVertex MicroCells::gridInterior(int i, int j) const {
   return {T_.P(b.x, b.y) + (d_.scale * (raw + d_.bias)) * glm::normalize(N), uv};
 }
 
-MicroVertex MicroCells::world(const PV& v) const {
+MicroVertex MicroCells::world(const PV& v, GridVertexCache* cache) const {
   switch (v.kind) {
     case Kind::TVertex: {
       const int k = v.a;
@@ -122,7 +122,7 @@ MicroVertex MicroCells::world(const PV& v) const {
           const double t = std::clamp(glm::dot(v.s - E_[e].SA, ab) / glm::dot(ab, ab), 0.0, 1.0);
           return onEdge(e, t, d_.map->at(v.a, v.b));
         }
-      return gridInterior(v.a, v.b);
+      return cache ? gridInterior(v.a, v.b, *cache) : gridInterior(v.a, v.b);
     }
   }
 }
@@ -185,7 +185,7 @@ int MicroCells::cell(int i, int j, MicroTriangle* out) const {
     out[1] = MicroTriangle{{v00, v11, v01}};
     return 2;
   }
-  return clipped(i, j, out);
+  return clipped(i, j, out, nullptr);
 }
 
 int MicroCells::cell(int i, int j, MicroTriangle* out, GridVertexCache& cache) const {
@@ -197,11 +197,26 @@ int MicroCells::cell(int i, int j, MicroTriangle* out, GridVertexCache& cache) c
     out[1] = MicroTriangle{{v00, v11, v01}};
     return 2;
   }
-  return clipped(i, j, out);
+  return clipped(i, j, out, &cache);
 }
 
 // Cells crossing T's boundary: Sutherland-Hodgman on each half, then the fan.
-int MicroCells::clipped(int i, int j, MicroTriangle* out) const {
+int MicroCells::clipped(int i, int j, MicroTriangle* out, GridVertexCache* cache) const {
+  // An edge whose inner half-plane holds the whole cell with a margin is not clipped
+  // against: Sutherland-Hodgman returns an all-inside polygon unchanged (same vertices,
+  // same order), and every vertex the other clips create lies in the cell up to rounding
+  // far below the margin. A cell on one edge of T clips once per half instead of three
+  // times.
+  bool clipAgainst[3];
+  for (int e = 0; e < 3; ++e) {
+    const dvec2 d = E_[e].SB - E_[e].SA;
+    const double margin = 1e-9 * (std::abs(d.x) + std::abs(d.y)) *
+                          (1.0 + std::abs(double(i)) + std::abs(double(j)) + std::abs(E_[e].SA.x) + std::abs(E_[e].SA.y));
+    double least = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 4; ++c)
+      least = std::min(least, E_[e].sigma * orient(E_[e].SA, E_[e].SB, dvec2(i + (c & 1), j + (c >> 1))));
+    clipAgainst[e] = !(least > margin);
+  }
   int count = 0;
   // A triangle clipped by three half-planes has at most 6 vertices.
   std::array<PV, 8> bufA, bufB;
@@ -220,6 +235,7 @@ int MicroCells::clipped(int i, int j, MicroTriangle* out) const {
       poly[n++] = grid(i, j + 1, {LineType::V, i});
     }
     for (int e = 0; e < 3 && n > 0; ++e) {
+      if (!clipAgainst[e]) continue;
       n = clip(e, poly, n, tmp);
       std::swap(poly, tmp);
     }
@@ -231,7 +247,7 @@ int MicroCells::clipped(int i, int j, MicroTriangle* out) const {
     if (m < 3) continue;
     std::array<MicroVertex, 8> w;
     const int nv = std::min(m, int(w.size()));
-    for (int k = 0; k < nv; ++k) w[k] = world(tmp[k]);
+    for (int k = 0; k < nv; ++k) w[k] = world(tmp[k], cache);
     for (int k = 1; k + 1 < nv; ++k) out[count++] = MicroTriangle{{w[0], w[k], w[k + 1]}};
   }
   return count;
