@@ -64,16 +64,24 @@ struct Displacement {
   float scale = 1.0f;
   float bias = 0.0f;
   vec2 tiling{1.0f, 1.0f};
+  // Level of detail (core/lod.h, docs/lod.md). At λ = lod > 0, `map` holds level
+  // k = floor(λ)'s grid with the heights at λ, its sample (i, j) sits at level 0's
+  // (2^k i, 2^k j), so uv 0 is at sample −sampleOffset = −½·2^-k; `level0` keeps the
+  // full-resolution map. LoD off: lod 0, sampleOffset ½, no level0.
+  float lod = 0.0f;
+  double sampleOffset = 0.5;
+  std::shared_ptr<const HeightMap> level0{};
 
-  // Continuous sample coordinates of a uv: the texel centre of texel (i, j) is (i, j).
+  // Continuous sample coordinates of a uv: at level 0 the texel centre of texel (i, j)
+  // is (i, j).
   dvec2 toSample(const vec2& uv) const {
-    return {double(uv.x) * double(tiling.x) * map->width() - 0.5,
-            double(uv.y) * double(tiling.y) * map->height() - 0.5};
+    return {double(uv.x) * double(tiling.x) * map->width() - sampleOffset,
+            double(uv.y) * double(tiling.y) * map->height() - sampleOffset};
   }
   // uv of the sample point (i, j) (inverse of toSample).
   vec2 sampleToUV(double i, double j) const {
-    return vec2(float((i + 0.5) / (double(map->width()) * tiling.x)),
-                float((j + 0.5) / (double(map->height()) * tiling.y)));
+    return vec2(float((i + sampleOffset) / (double(map->width()) * tiling.x)),
+                float((j + sampleOffset) / (double(map->height()) * tiling.y)));
   }
 
   // Height of one sample point (grid vertex of the micro-geometry).

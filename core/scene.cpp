@@ -4,6 +4,7 @@
 #include "core/scene.h"
 
 #include "core/error.h"
+#include "core/lod.h"
 #include "core/procedural.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -464,7 +465,7 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
   }
   if (top.has("strategies")) {
     const Reader st = top.object("strategies");
-    st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal"});
+    st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal", "lod"});
     parseStrategy(st, "range", s.range);
     parseStrategy(st, "inverter", s.inverter);
     parseStrategy(st, "splitter", s.splitter);
@@ -474,6 +475,12 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
       st.errorAt("marching_scale", "must be positive (texels) and >= {} (smaller only multiplies the work), got {}",
                  kMinMarchingScale, s.marchingScale);
     s.inversionInTraversal = st.boolean("inversion_in_traversal", s.inversionInTraversal);
+    if (st.has("lod")) {
+      const json& v = st.at("lod");
+      if (v.is_string() && v.get<std::string>() == "off") s.lod.reset();
+      else if (v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0.0) s.lod = v.get<float>();
+      else st.errorAt("lod", "must be \"off\" or a level of detail >= 0 (a number), got {}", shown(v));
+    }
   }
   top.require("meshes");
   const json& meshes = array(top, "meshes");
@@ -485,6 +492,7 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
   }
   MapCache cache;
   for (const Reader& r : entries) s.meshes.push_back(parseMesh(r, cache));
+  if (s.lod) setLod(s, s.lod, path + ": strategies.lod");
   return s;
 }
 
@@ -577,6 +585,27 @@ Scene loadScene(const std::string& path) {
   } catch (const Error& e) {
     rethrowOneLine(e);
   }
+}
+
+void setLod(Scene& scene, std::optional<float> lod, const std::string& where) {
+  if (lod && !(std::isfinite(*lod) && *lod >= 0.0f))
+    fail(where, "must be \"off\" or a level of detail >= 0, got {}", *lod);
+  std::map<const HeightMap*, Displacement> built;  // level-0 map -> the displacement at λ
+  for (SceneMesh& sm : scene.meshes) {
+    if (!sm.displacement) continue;
+    Displacement& d = *sm.displacement;
+    const Displacement base = atLevel0(d);
+    if (!lod) {
+      d = base;
+      continue;
+    }
+    auto it = built.find(base.map.get());
+    if (it == built.end()) it = built.emplace(base.map.get(), atLod(base, *lod)).first;
+    // Same map, own scale, bias and tiling.
+    const Displacement& shared = it->second;
+    d.map = shared.map, d.level0 = shared.level0, d.lod = shared.lod, d.sampleOffset = shared.sampleOffset;
+  }
+  scene.lod = lod;
 }
 
 }  // namespace oblong

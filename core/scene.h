@@ -58,6 +58,10 @@ struct Scene {
   StrategyChoice baseline{"", nlohmann::json::object(), "<default>: strategies.baseline"};
   float marchingScale = 4.0f;        // texels: rectangles at most this size are marched
   bool inversionInTraversal = true;  // invert box intervals to tighten rectangles
+  // Level of detail (docs/lod.md): none = off (full resolution, nothing built), or one
+  // λ >= 0 for the whole scene, clamped per map to its last level. The meshes'
+  // displacements are already at it (setLod).
+  std::optional<float> lod;
   ivec2 imageSize{640, 480};
 };
 
@@ -66,6 +70,11 @@ struct Scene {
 // file and the key.
 Scene loadScene(const std::string& path);
 Scene parseScene(const nlohmann::json& j, const std::string& path);
+
+// Moves every displaced mesh to λ (none: full resolution), from its level-0 map; meshes
+// sharing a map share the level built for them. Throws oblong::Error (naming `where`)
+// for a negative or non-finite λ.
+void setLod(Scene& scene, std::optional<float> lod, const std::string& where);
 
 // The built-in default scene: no data files (procedural map, generated meshes).
 Scene defaultScene();

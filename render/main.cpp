@@ -14,6 +14,7 @@
 #include "oblong_version.h"
 
 #include "core/error.h"
+#include "core/lod.h"
 #include "core/memory.h"
 #include "core/procedural.h"
 #include "core/scene.h"
@@ -111,8 +112,12 @@ struct StrategyFlags {
   std::string range, inverter, splitter, baseline;
   std::optional<float> marchingScale, step;
   std::optional<bool> inversionInTraversal;
+  std::string lod;  // empty: the scene's
 
   void add(CLI::App* app) {
+    app->add_option("--lod", lod,
+                    "level of detail: off | a number >= 0, clamped to each map's last level (docs/lod.md; default: "
+                    "the scene's, off)");
     app->add_option("--range", range, "RangeQuery: " + strategyChoices(StrategyKind::Range));
     app->add_option("--inverter", inverter, "Inverter: " + strategyChoices(StrategyKind::Inverter));
     app->add_option("--splitter", splitter, "Splitter: " + strategyChoices(StrategyKind::Splitter));
@@ -126,6 +131,34 @@ struct StrategyFlags {
     app->add_option("--step", step,
                     "world-space step of --baseline fixedstep (default: one texel; at least 1/64 of the smallest "
                     "texel's world size)");
+  }
+
+  // --lod moves the scene's displaced meshes to that level of detail (from their
+  // full-resolution maps), before anything is built for them.
+  void applyLod(Scene& scene) const {
+    if (!lod.empty()) {
+      std::optional<float> l;
+      if (lod != "off") {
+        float v = 0.0f;
+        const auto [end, ec] = std::from_chars(lod.data(), lod.data() + lod.size(), v);
+        if (ec != std::errc() || end != lod.data() + lod.size() || !std::isfinite(v) || v < 0.0f)
+          fail("--lod", "must be off or a level of detail >= 0 (a number), got '{}'", lod);
+        l = v;
+      }
+      setLod(scene, l, "--lod");
+    }
+    warnLodClamped(scene);
+  }
+
+  static void warnLodClamped(const Scene& scene) {
+    if (!scene.lod) return;
+    for (size_t i = 0; i < scene.meshes.size(); ++i) {
+      const auto& d = scene.meshes[i].displacement;
+      if (!d || d->lod >= *scene.lod) continue;
+      const HeightMap& m = d->level0 ? *d->level0 : *d->map;
+      fmt::print(stderr, "oblong: warning: {}: meshes[{}]: map {} ({}x{}) has levels of detail up to {}: traced at {}, not {}\n",
+                 scene.path, i, m.name(), m.width(), m.height(), lodLevels(m), d->lod, *scene.lod);
+    }
   }
 
   AccelOptions resolve(const Scene& scene) const {
@@ -179,6 +212,15 @@ nlohmann::json configJson(const AccelOptions& o) {
   if (!c.baselineParams.empty()) j["baseline_params"] = c.baselineParams;
   if (c.baseline == "fixedstep") j["step"] = c.baselineParams.value("step", c.fixedStep);
   return j;
+}
+
+// The scene's level of detail and, per displaced mesh, the λ it is traced at.
+nlohmann::json lodJson(const Scene& scene) {
+  if (!scene.lod) return "off";
+  nlohmann::json per = nlohmann::json::array();
+  for (const SceneMesh& sm : scene.meshes)
+    per.push_back(sm.displacement ? nlohmann::json(sm.displacement->lod) : nlohmann::json(nullptr));
+  return {{"requested", *scene.lod}, {"per_mesh", per}};
 }
 
 void writeJson(const std::string& path, const nlohmann::json& j) { writeTextOutput(path, j.dump(2) + "\n"); }
@@ -240,6 +282,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   Progress progress(mode);
   progress.phase("loading " + (scenePath.empty() ? std::string("the built-in scene") : scenePath));
   Scene scene = sceneFrom(scenePath);
+  flags.applyLod(scene);
   const double loadSeconds = progress.elapsed();
   const AccelOptions accelOpts = flags.resolve(scene);
   if (f.size.empty()) opts.size = scene.imageSize;
@@ -308,6 +351,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
     j["scene"] = scene.path;
     j["geometry"] = accel.geometryName();
     j["config"] = configJson(accelOpts);
+    j["config"]["lod"] = lodJson(scene);
     j["traversal"] = accel.describe();
     j["image"] = {{"width", opts.size.x}, {"height", opts.size.y}, {"file", f.out}};
     j["integrator"] = integratorName(opts.integrator);
@@ -336,7 +380,8 @@ int runBake(const std::string& scenePath, const std::string& out, const std::str
             const std::string& raysPath, const StrategyFlags& flags) {
   checkOutputPath(out, "baked scene");
   checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}});
-  const Scene scene = sceneFrom(scenePath);
+  Scene scene = sceneFrom(scenePath);
+  flags.applyLod(scene);
   const AccelOptions accelOpts = flags.resolve(scene);
   const ivec2 image = size.empty() ? scene.imageSize : parseSize(size);
   const std::vector<Ray> rays = raysPath.empty() ? std::vector<Ray>() : readRays(raysPath);
@@ -351,6 +396,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}, {"--stats", statsPath}});
   const auto start = std::chrono::steady_clock::now();
   Scene scene = sceneFrom(scenePath);
+  flags.applyLod(scene);
   const AccelOptions accelOpts = flags.resolve(scene);
   const std::vector<Ray> rays = readRays(raysPath);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -388,6 +434,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
     j["rays"] = {{"file", raysPath}, {"count", rays.size()}, {"hits", found}};
     j["geometry"] = accel.geometryName();
     j["config"] = configJson(accelOpts);
+    j["config"]["lod"] = lodJson(scene);
     j["traversal"] = accel.describe();
     j["seconds"] = {{"build", accel.buildSeconds()}, {"trace", seconds}};
     j["mrays_per_second"] = rays.size() / std::max(seconds, 1e-9) * 1e-6;
@@ -446,7 +493,6 @@ void printTraversal(const nlohmann::json& d) {
                    : std::string());
   else
     fmt::print("      wrap     : none stored (queries crossing the border are split, or wrap addressing)\n");
-  fmt::print("      LoD      : no levels built (LoD off: only lod 0 is defined, docs/decisions.md)\n");
   fmt::print("    traversal: {} path; inverter {} {}; splitter {} {}; marching scale {}, inversion in traversal {}\n",
              d.at("path").get<std::string>(), d.at("inverter").at("name").get<std::string>(),
              infoValue("", d.at("inverter").at("params")), d.at("splitter").at("name").get<std::string>(),
@@ -474,10 +520,12 @@ int runStrategies(bool json) {
   return 0;
 }
 
-int runInfo(const std::string& scenePath, const std::string& range) {
+int runInfo(const std::string& scenePath, const std::string& range, const std::string& lod) {
   Scene scene = sceneFrom(scenePath);
   StrategyFlags flags;
   flags.range = range;
+  flags.lod = lod;
+  flags.applyLod(scene);
   const TraversalConfig cfg = flags.resolve(scene).traversal;
   fmt::print("scene {}\n", scene.path);
   size_t displaced = 0, total = 0;
@@ -502,9 +550,17 @@ int runInfo(const std::string& scenePath, const std::string& range) {
     }
     const QueryNeeds needs = QueryNeeds::forRects(d, boxes);
     const bool tiled = d.tiling != vec2(1.0f);
-    fmt::print("    needs    : range queries up to {}x{} samples; wrapping queries {}; LoD off\n", needs.maxExtentX,
+    fmt::print("    needs    : range queries up to {}x{} samples; wrapping queries {}\n", needs.maxExtentX,
                needs.maxExtentY,
                !needs.wrap ? "no" : tiled ? "yes (the map is tiled)" : "yes (triangles' cells cross the map border)");
+    if (!d.level0)
+      fmt::print("    LoD      : off, no levels built ({} levels possible for this map, docs/lod.md)\n",
+                 lodLevels(*d.map));
+    else
+      fmt::print("    LoD      : lod {}: level {} grid ({}x{} samples, {}) at the heights of lod {}; the {}x{} "
+                 "full-resolution map kept\n",
+                 d.lod, int(std::floor(d.lod)), d.map->width(), d.map->height(), human(d.map->bytes()), d.lod,
+                 d.level0->width(), d.level0->height());
     // Built once, as the renderer builds it; what is shown is that structure.
     const auto is = createIntersector(cfg, tris, d);
     if (const auto* t = dynamic_cast<const TraversalIntersectorBase*>(is.get())) {
@@ -539,7 +595,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // --help shows every option's default (subcommands copy these option defaults).
   app.option_defaults()->always_capture_default();
-  std::string scenePath, statsPath, range, raysPath, hitsPath = "hits.csv";
+  std::string scenePath, statsPath, range, raysPath, hitsPath = "hits.csv", lodFlag;
   int threads = 0;
   StrategyFlags flags;
   RenderFlags rf;
@@ -589,6 +645,7 @@ int main(int argc, char** argv) {
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
   info->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
   info->add_option("--range", range, "range-query strategy (default: the scene's)");
+  info->add_option("--lod", lodFlag, "level of detail: off | a number >= 0 (default: the scene's)");
   bool listStrategies = false, infoJson = false;
   info->add_flag("--strategies", listStrategies, "list the registered strategies (what --range etc. accept)");
   info->add_flag("--json", infoJson, "with --strategies: as JSON (read by the experiments)");
@@ -613,7 +670,7 @@ int main(int argc, char** argv) {
     if (*bake) return runBake(scenePath, bakeOut, bakeSize, raysPath, flags);
     if (*info && listStrategies) return runStrategies(infoJson);
     if (*info && infoJson) fail("--json", "only applies to --strategies");
-    if (*info) return runInfo(scenePath, range);
+    if (*info) return runInfo(scenePath, range, lodFlag);
   } catch (const Error& e) {
     fmt::print(stderr, "oblong: {}\n", e.what());
     return 1;

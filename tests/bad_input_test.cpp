@@ -212,6 +212,10 @@ TEST_CASE("bad input: one clear error line from the loader and from the command 
        {"meshes[0].displacement.scale"}},
       {"number beyond float", displaced("quad.obj", R"("map": "map.png", "bias": 1e39)"),
        {"meshes[0].displacement.bias", "finite"}},
+      {"negative level of detail", R"({"meshes": [{"file": "quad.obj"}], "strategies": {"lod": -2}})",
+       {"strategies.lod", ">= 0", "-2"}},
+      {"level of detail by an unknown name", R"({"meshes": [{"file": "quad.obj"}], "strategies": {"lod": "cone"}})",
+       {"strategies.lod", "\"off\" or a level of detail"}},
       {"zero marching scale", R"({"meshes": [{"file": "quad.obj"}], "strategies": {"marching_scale": 0}})",
        {"strategies.marching_scale", "positive"}},
       {"negative marching scale", R"({"meshes": [{"file": "quad.obj"}], "strategies": {"marching_scale": -1}})",
@@ -492,6 +496,10 @@ TEST_CASE("bad input: flags whose work or memory has no bound are refused before
       {"render --no-such-flag -o " + png, {"command line", "--no-such-flag"}},
       {"render --progress sometimes -o " + png, {"--progress", "sometimes"}},
       {"render --aovs " + (dir / "a.png").string() + " -o " + png, {"a.png", ".exr"}},
+      {"render --lod -1 -o " + png, {"--lod", "-1"}},
+      {"render --lod fine -o " + png, {"--lod", "'fine'"}},
+      {"render --lod nan -o " + png, {"--lod", ">= 0"}},
+      {"info --lod 1e99", {"--lod", "1e99"}},
       {"render -o " + (dir / "x.xyz").string(), {"x.xyz", "no image format"}},
   };
   for (const C& c : cases) checkOneLineError(runCli(c.args), c.args, c.expect);

@@ -72,7 +72,7 @@ TEST_CASE("oblong info reports the range-query structures built for the scene", 
     CHECK(has(r.out, "wrapping queries yes (the map is tiled)"));
     CHECK(has(r.out, "prisms   : 2304 built (2304 well-posed, 0 box-only), 0 skipped"));
     CHECK(has(r.out, "built    : no range query, no prisms"));
-    CHECK(has(r.out, "LoD      : no levels built"));
+    CHECK(has(r.out, "LoD      : off, no levels built (7 levels possible"));
     CHECK(has(r.out, "total    : "));
   }
   // Each strategy's describe(): its layout, resolved parameters and the code path.
@@ -309,4 +309,35 @@ TEST_CASE("oblong trace: bad ray files and flags give one clear error line", "[c
     CHECK(lines(r.err) == 1);
     CHECK(r.err.find(c.mustContain) != std::string::npos);
   }
+}
+
+TEST_CASE("oblong render and info at a fixed level of detail", "[cli][lod]") {
+  auto has = [](const std::string& out, const std::string& s) { return out.find(s) != std::string::npos; };
+  const auto dir = oblong::test::scratchDir("cli_lod");
+  const std::string png = (dir / "lod.png").string(), stats = (dir / "stats.json").string();
+  // The default torus' map is 384x256: 7 levels; lod 2.5 traces level 2's 96x64 grid.
+  const Run i = run("info --lod 2.5");
+  INFO(i.out << i.err);
+  REQUIRE(i.status == 0);
+  CHECK(has(i.out, "LoD      : lod 2.5: level 2 grid (96x64 samples"));
+  CHECK(has(i.out, "the 384x256 full-resolution map kept"));
+  const Run r = run("render --size 32x24 --threads 2 --lod 2.5 -o " + png + " --stats " + stats);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  std::ifstream f(stats);
+  const auto j = nlohmann::json::parse(f);
+  CHECK(j.at("config").at("lod").at("requested") == 2.5);
+  CHECK(j.at("config").at("lod").at("per_mesh").at(0) == 2.5);  // the torus
+  CHECK(j.at("config").at("lod").at("per_mesh").at(1).is_null());  // the plain ground
+  // Beyond the map's last level: one warning line, traced at the last level.
+  const Run c = run("render --size 16x12 --threads 2 --lod 12 -o " + png);
+  INFO(c.out << c.err);
+  CHECK(c.status == 0);
+  CHECK(has(c.err, "oblong: warning: <default>: meshes[0]: map <procedural 384x256> (384x256) has levels of detail up "
+                   "to 7: traced at 7, not 12\n"));
+  // Off by default, and "--lod off" overrides a scene's λ.
+  const Run o = run("render --size 16x12 --threads 2 --lod off -o " + png + " --stats " + stats);
+  REQUIRE(o.status == 0);
+  std::ifstream g(stats);
+  CHECK(nlohmann::json::parse(g).at("config").at("lod") == "off");
 }

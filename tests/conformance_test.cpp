@@ -316,6 +316,23 @@ TEST_CASE("conformance: every combination agrees with the oracles on a displaced
   runConformance(loadScene(kSphere), 150);
 }
 
+TEST_CASE("lod: every combination agrees with the oracles at fractional levels of detail", "[conformance][lod]") {
+  // The oracles take the same λ: they read the same displacement (docs/lod.md).
+  Scene quad = tiledQuadScene();
+  quad.meshes[0].displacement->map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 3));  // 4 levels
+  for (const float lod : {0.5f, 1.0f, 2.25f, 4.0f}) {
+    setLod(quad, lod, "test");
+    REQUIRE(quad.meshes[0].displacement->lod == lod);
+    runConformance(quad, 40);
+  }
+  Scene sphere = loadScene(kSphere);  // 512x256: 7 levels
+  for (const float lod : {0.5f, 2.25f, 7.0f}) {
+    setLod(sphere, lod, "test");
+    REQUIRE(sphere.meshes[0].displacement->lod == lod);
+    runConformance(sphere, 40);
+  }
+}
+
 TEST_CASE("translation: a scene moved by 1e2, 1e4, 1e6 traces as at the origin", "[conformance][translation]") {
   runTranslation(tiledQuadScene(), 120);
   runTranslation(loadScene(kSphere), 60);

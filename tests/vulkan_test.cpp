@@ -368,6 +368,17 @@ TEST_CASE("vulkan: same hits as the CPU on the tiled quad moved by 1e6", "[vulka
   CHECK(p.agree == p.rays);
 }
 
+TEST_CASE("vulkan: same hits as the CPU on the tiled quad at lod 1.5", "[vulkan][lod]") {
+  // The level's grid starts at sample -sampleOffset (docs/lod.md): the shader's
+  // sampleToUV reads it from MeshGpu; a shader that kept 0.5 would miss this.
+  Scene s = loadScene(scenePath("quad_tiled.json"));
+  setLod(s, 1.5f, "test");
+  REQUIRE(s.meshes[0].displacement->lod == 1.5f);
+  const Parity p = compare(s, testRays(s, {64, 48}, 4096, 4), "quad_tiled at lod 1.5");
+  CHECK(p.hits > 2000);
+  CHECK(p.agree == p.rays);
+}
+
 // Not in CI (hidden; run with "[vulkan_large]"): the parity numbers of docs/vulkan.md, 10^5 rays per scene.
 // Run with GALLIVM_PERF= (empty) to time lavapipe's optimised shader.
 TEST_CASE("vulkan: parity at scale", "[.][vulkan_large]") {

@@ -48,7 +48,7 @@ struct LocalFrame {
     const dvec2 t0(T.t[0]), t1(T.t[1]), t2(T.t[2]);
     const dvec2 du = t1 - t0, dv = t2 - t0;
     // (X,Y) of barycentrics.
-    F.sc = t0 * F.perUV - 0.5 - dvec2(F.origin);
+    F.sc = t0 * F.perUV - d.sampleOffset - dvec2(F.origin);
     F.sU = du * F.perUV;
     F.sV = dv * F.perUV;
     // Inverse, in double (not T.uvToBary, which is float).

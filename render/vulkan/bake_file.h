@@ -21,7 +21,7 @@
 
 namespace oblong::vk {
 
-inline constexpr uint32_t kBakeVersion = 2;
+inline constexpr uint32_t kBakeVersion = 3;
 
 struct BakedScene {
   GpuRecords records;

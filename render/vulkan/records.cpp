@@ -141,6 +141,7 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
     m.texelOffset = uint32_t(texels.size());
     m.W = d.map->width(), m.H = d.map->height();
     m.scale = d.scale, m.bias = d.bias, m.tiling = d.tiling;
+    m.sampleOffset = float(d.sampleOffset);  // 2^-(k+1): exact in float
     m.marchingScale = cfg.marchingScale;
     m.inversionInTraversal = cfg.inversionInTraversal;
     // The CPU traversal's own Rmip (built by createIntersector above), copied as it is.

@@ -122,7 +122,7 @@ struct MeshGpu {
   uint indexOffset;  // plain: first index (3 per triangle)
   uint vertexOffset; // plain: first vertex
   float originX, originY, originZ;  // Mesh::origin: the instance's translation
-  float pad0;
+  float sampleOffset;  // Displacement::sampleOffset: uv 0 is at sample -sampleOffset (LoD)
 };
 
 // Intersection -> closest-hit attributes (displaced prisms).

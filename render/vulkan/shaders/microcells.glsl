@@ -20,8 +20,8 @@ float mapAt(int i, int j) {
 }
 // Displacement::sampleToUV
 vec2 sampleToUV(int i, int j) {
-  precise double x = (double(i) + 0.5) / (double(g_mesh.W) * double(g_mesh.tiling.x));
-  precise double y = (double(j) + 0.5) / (double(g_mesh.H) * double(g_mesh.tiling.y));
+  precise double x = (double(i) + double(g_mesh.sampleOffset)) / (double(g_mesh.W) * double(g_mesh.tiling.x));
+  precise double y = (double(j) + double(g_mesh.sampleOffset)) / (double(g_mesh.H) * double(g_mesh.tiling.y));
   return vec2(float(x), float(y));
 }
 // Displacement::microAtSample

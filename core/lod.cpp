@@ -1,0 +1,97 @@
+#include "core/lod.h"
+
+#include "core/error.h"
+#include "core/memory.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace oblong {
+
+int lodLevels(const HeightMap& m) {
+  int k = 0;
+  while (m.width() % (2 << k) == 0 && m.height() % (2 << k) == 0 && (m.width() >> (k + 1)) >= 2 &&
+         (m.height() >> (k + 1)) >= 2)
+    ++k;
+  return k;
+}
+
+HeightMap downsampleLevel(const HeightMap& fine) {
+  const int W = fine.width() / 2, H = fine.height() / 2;
+  if (fine.width() % 2 || fine.height() % 2 || W < 2 || H < 2)
+    fail(fine.name(), "{}x{} has no coarser level of detail (sizes must be even and at least 4)", fine.width(),
+         fine.height());
+  checkFits(fine.name(), "a level of detail", size_t(W) * size_t(H) * sizeof(float), "turn LoD off",
+            fmt::format("{}x{} float texels", W, H));
+  std::vector<float> out(size_t(W) * H);
+  // Horizontal pass first into rows kept per coarse row: three fine rows per coarse row.
+  auto row = [&](int j, std::vector<float>& r) {
+    for (int i = 0; i < W; ++i)
+      r[i] = 0.25f * fine.at(2 * i - 1, j) + 0.5f * fine.at(2 * i, j) + 0.25f * fine.at(2 * i + 1, j);
+  };
+  std::vector<float> a(W), b(W), c(W);
+  for (int j = 0; j < H; ++j) {
+    row(2 * j - 1, a);
+    row(2 * j, b);
+    row(2 * j + 1, c);
+    for (int i = 0; i < W; ++i) out[size_t(j) * W + i] = 0.25f * a[i] + 0.5f * b[i] + 0.25f * c[i];
+  }
+  return HeightMap(W, H, std::move(out), fine.name());
+}
+
+HeightMap heightsAtLod(const HeightMap& level0, double lambda) {
+  const int K = lodLevels(level0);
+  if (!(lambda >= 0.0 && lambda <= K))
+    fail(level0.name(), "level of detail {} is outside [0, {}] for a {}x{} map", lambda, K, level0.width(),
+         level0.height());
+  const int k = std::min(int(std::floor(lambda)), K);
+  const float f = float(lambda - k);
+  // Levels 1 .. k, each from the one before (level 0 is not copied).
+  HeightMap coarse;
+  for (int l = 0; l < k; ++l) coarse = downsampleLevel(l == 0 ? level0 : coarse);
+  const HeightMap& level = k == 0 ? level0 : coarse;
+  const std::string name = fmt::format("{}@lod{}", level0.name(), lambda);
+  if (f == 0.0f) return HeightMap(level.width(), level.height(), level.texels(), name);
+  const HeightMap next = downsampleLevel(level);
+  std::vector<float> out(level.texels().size());
+  const int W = level.width(), H = level.height();
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < W; ++i) {
+      // L_{k+1} at level-k point (i, j) = level-(k+1) point (i/2, j/2): a coarse sample,
+      // the middle of a coarse cell edge, or (both odd) the middle of the cell's diagonal
+      // (a, b)-(a+1, b+1), which the micro-geometry's split puts in both of its triangles.
+      const int a = i >> 1, b = j >> 1;
+      float L;
+      if (!(i & 1) && !(j & 1)) L = next.at(a, b);
+      else if (!(j & 1)) L = 0.5f * (next.at(a, b) + next.at(a + 1, b));
+      else if (!(i & 1)) L = 0.5f * (next.at(a, b) + next.at(a, b + 1));
+      else L = 0.5f * (next.at(a, b) + next.at(a + 1, b + 1));
+      out[size_t(j) * W + i] = (1.0f - f) * level.atUnchecked(i, j) + f * L;
+    }
+  return HeightMap(W, H, std::move(out), name);
+}
+
+Displacement atLevel0(const Displacement& d) {
+  Displacement r = d;
+  if (d.level0) r.map = d.level0;
+  r.level0.reset();
+  r.lod = 0.0f;
+  r.sampleOffset = 0.5;
+  return r;
+}
+
+Displacement atLod(const Displacement& d, float lambda) {
+  if (!(lambda >= 0.0f) || !std::isfinite(lambda)) fail(d.map->name(), "level of detail must be a finite number >= 0, got {}", lambda);
+  Displacement r = atLevel0(d);
+  const float l = std::min(lambda, float(lodLevels(*r.map)));
+  if (l == 0.0f) return r;
+  const int k = int(std::floor(l));
+  r.level0 = r.map;
+  r.map = std::make_shared<const HeightMap>(heightsAtLod(*r.level0, l));
+  r.lod = l;
+  r.sampleOffset = std::ldexp(0.5, -k);
+  return r;
+}
+
+}  // namespace oblong
