@@ -148,17 +148,21 @@ PrismParams analyzeShell(const DisplacedTriangle& T, const Displacement& d, cons
   box.pad(P.vertexErr);
   P.bounds = box.toFloatOutward();
 
-  // Bulge / projection bounds. Two points of one cell differ in barycentrics by at most
-  // cellB per component; N by at most fcell.
-  // Within a cell ΔX, ΔY ∈ [−1, 1], so N changes by at most max(|NX + NY|, |NX − NY|).
-  const double fcell = std::max(glm::length(F.NX + F.NY), glm::length(F.NX - F.NY));
+  // Bulge / projection bounds. A micro-triangle lies in one cell and in T, so its
+  // sample coordinates span at most rX = min(1, T's extent in X) and rY likewise (T
+  // narrower than a cell: a coarse level of detail, or a dense mesh on a small map).
+  const double eX = std::max({0.0, F.sU.x, F.sV.x}) - std::min({0.0, F.sU.x, F.sV.x});
+  const double eY = std::max({0.0, F.sU.y, F.sV.y}) - std::min({0.0, F.sU.y, F.sV.y});
+  const double rX = std::min(1.0, eX), rY = std::min(1.0, eY);
+  // With ΔX ∈ [−rX, rX], ΔY ∈ [−rY, rY], N changes by at most max(|NX rX + NY rY|, |NX rX − NY rY|).
+  const double fcell = std::max(glm::length(F.NX * rX + F.NY * rY), glm::length(F.NX * rX - F.NY * rY));
   const double dh = std::abs(double(d.scale)) * cellDelta;
   // σ = h/|N| varies within a micro-triangle by at most dsig.
   const double dsig = dh / m + H * fcell / (m * m);
   // The bulge of a micro-triangle point is Σλk (σk − σ̄) F (bk − b̄) = NX Cov(σ, X) +
   // NY Cov(σ, Y) (λ-weighted, X and Y the sample coordinates); a covariance of variables
-  // with ranges Rσ and 1 (one cell) is at most Rσ / 4.
-  const double w = dsig * (glm::length(F.NX) + glm::length(F.NY)) / 4 + 2 * P.vertexErr;
+  // with ranges Rσ and rX is at most Rσ rX / 4.
+  const double w = dsig * (glm::length(F.NX) * rX + glm::length(F.NY) * rY) / 4 + 2 * P.vertexErr;
   const double sSpan = P.b - P.a;
   // Fixed point: the bounds hold on the domain T_dom × [a − ds', b + ds'] that they
   // themselves require.

@@ -18,7 +18,8 @@
 // the projection (along the displacement lines) of a point of a cell's micro-triangle
 // lies up to ε outside that cell. analyzeShell() bounds both effects rigorously: with
 // b̄, σ̄ the convex combination of a micro-triangle's vertices in prism coordinates, a
-// point of the triangle is G(b̄, σ̄) + w, |w| ≤ Δσ·|F·Δb_cell| (+ float error), and its
+// point of the triangle is G(b̄, σ̄) + w, |w| ≤ Δσ·|F·Δb| with Δb within one cell and
+// within T (+ float error), and its
 // preimage moves by J(b̄, s)⁻¹ w (exactly, G being bilinear in (b, s)). |J⁻¹| is bounded
 // from below on det J over T_δ × [s0, s1]: det J is affine in b (extremes at the
 // vertices) and quadratic in s (closed-form minimum). The traversal then clips rays to
