@@ -33,6 +33,7 @@ class HeightMap {
   int height() const { return h_; }
   const std::string& name() const { return name_; }
   const std::vector<float>& texels() const { return texels_; }
+  std::vector<float> takeTexels() && { return std::move(texels_); }
 
   // Texel with wrap (repeat) addressing; i, j may be any integers.
   float at(int i, int j) const { return texels_[size_t(wrap(j, h_)) * w_ + wrap(i, w_)]; }

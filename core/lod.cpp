@@ -52,8 +52,13 @@ HeightMap heightsAtLod(const HeightMap& level0, double lambda) {
   for (int l = 0; l < k; ++l) coarse = downsampleLevel(l == 0 ? level0 : coarse);
   const HeightMap& level = k == 0 ? level0 : coarse;
   const std::string name = fmt::format("{}@lod{}", level0.name(), lambda);
-  if (f == 0.0f) return HeightMap(level.width(), level.height(), level.texels(), name);
+  if (f == 0.0f) {
+    std::vector<float> t = k == 0 ? level0.texels() : std::move(coarse).takeTexels();
+    return HeightMap(level.width(), level.height(), std::move(t), name);
+  }
   const HeightMap next = downsampleLevel(level);
+  checkFits(level0.name(), "the heights at a level of detail", level.texels().size() * sizeof(float), "turn LoD off",
+            fmt::format("{}x{} float texels", level.width(), level.height()));
   std::vector<float> out(level.texels().size());
   const int W = level.width(), H = level.height();
   for (int j = 0; j < H; ++j)

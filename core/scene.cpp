@@ -478,7 +478,8 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
     if (st.has("lod")) {
       const json& v = st.at("lod");
       if (v.is_string() && v.get<std::string>() == "off") s.lod.reset();
-      else if (v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0.0) s.lod = v.get<float>();
+      else if (v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0.0)
+        s.lod = float(std::min(v.get<double>(), 64.0));  // no map has more levels; clamped per map anyway
       else st.errorAt("lod", "must be \"off\" or a level of detail >= 0 (a number), got {}", shown(v));
     }
   }
