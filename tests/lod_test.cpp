@@ -6,6 +6,7 @@
 #include "core/scene.h"
 #include "render/embree_scene.h"
 #include "render/strategy_catalog.h"
+#include "tests/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 
@@ -141,17 +142,7 @@ TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot 
     for (const AccelOptions& opts : {tessellated, canonical, brute}) {
       EmbreeScene accel(s, opts);
       INFO("lod " << lod << ", " << accel.geometryName());
-      std::mt19937 rng(3);
-      std::uniform_real_distribution<float> U(0.0f, 1.0f);
-      int leaks = 0;
-      const int n = 4000;
-      for (int k = 0; k < n; ++k) {
-        const float a = 2.0f * std::numbers::pi_v<float> * U(rng);
-        const float z = 2 * U(rng) - 1, phi = 2.0f * std::numbers::pi_v<float> * U(rng);
-        const float rr = std::sqrt(std::max(0.0f, 1 - z * z));
-        Ray r{vec3(std::cos(a), 0.0f, std::sin(a)), vec3(rr * std::cos(phi), rr * std::sin(phi), z), 0.0f, kInfinity};
-        if (!accel.intersect(r).valid()) ++leaks;
-      }
+      const int n = 4000, leaks = test::torusLeaks(accel, n);
       INFO(leaks << " of " << n << " rays leaked");
       CHECK(leaks == 0);
     }

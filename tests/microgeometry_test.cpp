@@ -2,6 +2,7 @@
 #include "core/procedural.h"
 #include "render/embree_scene.h"
 #include "render/strategy_catalog.h"
+#include "tests/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 
@@ -101,18 +102,8 @@ TEST_CASE("a closed displaced torus leaks no ray shot from inside", "[microgeome
     EmbreeScene accel(s, opts);
     INFO(accel.geometryName());
     if (opts.tessellate) REQUIRE(accel.microTriangles() > 10000);
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> U(0.0f, 1.0f);
-    int leaks = 0;
-    const int n = 20000;
-    for (int k = 0; k < n; ++k) {
-      // Origins on the tube's centre circle; the shell stays within 0.075 of radius 0.4.
-      const float a = 2.0f * std::numbers::pi_v<float> * U(rng);
-      const float z = 2 * U(rng) - 1, phi = 2.0f * std::numbers::pi_v<float> * U(rng);
-      const float rr = std::sqrt(std::max(0.0f, 1 - z * z));
-      Ray r{vec3(std::cos(a), 0.0f, std::sin(a)), vec3(rr * std::cos(phi), rr * std::sin(phi), z), 0.0f, kInfinity};
-      if (!accel.intersect(r).valid()) ++leaks;
-    }
+    // Origins on the tube's centre circle; the shell stays within 0.075 of radius 0.4.
+    const int n = 20000, leaks = test::torusLeaks(accel, n);
     INFO(leaks << " of " << n << " rays leaked");
     CHECK(leaks == 0);
   }

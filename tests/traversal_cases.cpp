@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <numbers>
 
 namespace oblong::test {
 
@@ -204,6 +205,20 @@ std::string describe(const TraversalConfig& c) {
   return fmt::format("{}+{}+{} (march {}, inversion {}{}{})", c.range, c.inverter, c.splitter, c.marchingScale,
                      c.inversionInTraversal ? "on" : "off", c.rangeParams.empty() ? "" : ", range ",
                      c.rangeParams.empty() ? "" : c.rangeParams.dump());
+}
+
+int torusLeaks(const EmbreeScene& accel, int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  int leaks = 0;
+  for (int k = 0; k < n; ++k) {
+    const float a = 2.0f * std::numbers::pi_v<float> * U(rng);
+    const float z = 2 * U(rng) - 1, phi = 2.0f * std::numbers::pi_v<float> * U(rng);
+    const float rr = std::sqrt(std::max(0.0f, 1 - z * z));
+    Ray r{vec3(std::cos(a), 0.0f, std::sin(a)), vec3(rr * std::cos(phi), rr * std::sin(phi), z), 0.0f, kInfinity};
+    if (!accel.intersect(r).valid()) ++leaks;
+  }
+  return leaks;
 }
 
 }  // namespace oblong::test

@@ -4,6 +4,7 @@
 
 #include "core/mesh.h"
 #include "core/microgeometry.h"
+#include "render/embree_scene.h"
 #include "render/intersector.h"
 #include "render/strategy_catalog.h"
 
@@ -71,5 +72,10 @@ struct ConformanceConfig {
 constexpr int kSlowStride = 8;
 std::vector<ConformanceConfig> conformanceConfigs();
 std::string describe(const TraversalConfig& c);
+
+// Watertightness: n rays from random points of the centre circle (radius 1, in the xz
+// plane) of a closed displaced torus whose shell stays inside its tube, in random
+// directions; returns how many found no hit (a leak).
+int torusLeaks(const EmbreeScene& accel, int n, unsigned seed = 3);
 
 }  // namespace oblong::test
