@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace oblong {
@@ -26,16 +27,26 @@ HeightMap downsampleLevel(const HeightMap& fine) {
             fmt::format("{}x{} float texels", W, H));
   std::vector<float> out(size_t(W) * H);
   // Horizontal pass first into rows kept per coarse row: three fine rows per coarse row.
-  auto row = [&](int j, std::vector<float>& r) {
-    for (int i = 0; i < W; ++i)
-      r[i] = 0.25f * fine.at(2 * i - 1, j) + 0.5f * fine.at(2 * i, j) + 0.25f * fine.at(2 * i + 1, j);
+  // Each value is clamped to its inputs' range: float rounding of the weighted sum could
+  // leave it by an ulp, and range queries at a level of detail rely on every level
+  // staying within the level-0 samples of its support (docs/lod.md).
+  struct Span {
+    float v, lo, hi;
   };
-  std::vector<float> a(W), b(W), c(W);
+  auto row = [&](int j, std::vector<Span>& r) {
+    for (int i = 0; i < W; ++i) {
+      const float p = fine.at(2 * i - 1, j), q = fine.at(2 * i, j), s = fine.at(2 * i + 1, j);
+      r[i] = {0.25f * p + 0.5f * q + 0.25f * s, std::min({p, q, s}), std::max({p, q, s})};
+    }
+  };
+  std::vector<Span> a(W), b(W), c(W);
   for (int j = 0; j < H; ++j) {
     row(2 * j - 1, a);
     row(2 * j, b);
     row(2 * j + 1, c);
-    for (int i = 0; i < W; ++i) out[size_t(j) * W + i] = 0.25f * a[i] + 0.5f * b[i] + 0.25f * c[i];
+    for (int i = 0; i < W; ++i)
+      out[size_t(j) * W + i] = std::clamp(0.25f * a[i].v + 0.5f * b[i].v + 0.25f * c[i].v,
+                                          std::min({a[i].lo, b[i].lo, c[i].lo}), std::max({a[i].hi, b[i].hi, c[i].hi}));
   }
   return HeightMap(W, H, std::move(out), fine.name());
 }
@@ -66,13 +77,14 @@ HeightMap heightsAtLod(const HeightMap& level0, double lambda) {
       // L_{k+1} at level-k point (i, j) = level-(k+1) point (i/2, j/2): a coarse sample,
       // the middle of a coarse cell edge, or (both odd) the middle of the cell's diagonal
       // (a, b)-(a+1, b+1), which the micro-geometry's split puts in both of its triangles.
+      // Every value stays within the values it is made of (as in downsampleLevel).
       const int a = i >> 1, b = j >> 1;
-      float L;
-      if (!(i & 1) && !(j & 1)) L = next.at(a, b);
-      else if (!(j & 1)) L = 0.5f * (next.at(a, b) + next.at(a + 1, b));
-      else if (!(i & 1)) L = 0.5f * (next.at(a, b) + next.at(a, b + 1));
-      else L = 0.5f * (next.at(a, b) + next.at(a + 1, b + 1));
-      out[size_t(j) * W + i] = (1.0f - f) * level.atUnchecked(i, j) + f * L;
+      const float p = next.at(a, b);
+      const float q = !(i & 1) && !(j & 1) ? p : !(j & 1) ? next.at(a + 1, b) : !(i & 1) ? next.at(a, b + 1)
+                                                                                     : next.at(a + 1, b + 1);
+      const float L = std::clamp(0.5f * (p + q), std::min(p, q), std::max(p, q));
+      const float h = level.atUnchecked(i, j);
+      out[size_t(j) * W + i] = std::clamp((1.0f - f) * h + f * L, std::min(h, L), std::max(h, L));
     }
   return HeightMap(W, H, std::move(out), name);
 }

@@ -3,6 +3,7 @@
 #include "strategies/range_query.h"
 
 #include "core/error.h"
+#include "core/lod.h"
 #include "strategies/quantize.h"
 
 #include <sys/mman.h>
@@ -70,8 +71,22 @@ bool keepsQuantizer(const HeightMap& m, const SampleRange& changed, const Quanti
   return fresh.base == q.base && fresh.step == q.step;
 }
 
-void throwLodUnsupported(std::string_view strategy, float lod) {
-  fail(std::string(strategy), "level of detail {} requested, but only lod 0 is supported", lod);
+SampleRange RangeQuery::snapAtLod(const Rect& uv, float lod) const {
+  if (!(lod >= 0.0f) || !std::isfinite(lod))
+    fail(std::string(name()), "level of detail must be a finite number >= 0, got {}", lod);
+  if (disp_.level0)
+    fail(std::string(name()), "built on {} (already at level of detail {}): level of detail {} asked of it",
+         map().name(), disp_.lod, lod);
+  const float l = std::min(lod, float(lodLevels(map())));
+  const int k = int(std::floor(l)), top = l > float(k) ? k + 1 : k;
+  const double step = std::ldexp(1.0, top), support = step - 1.0;
+  const dvec2 a = disp_.toSample(uv.lo), b = disp_.toSample(uv.hi);
+  // The same margin as snap, in level-0 samples; clamped in double so that no tiling
+  // overflows int (an extent beyond the map means "whole axis" to every strategy).
+  constexpr double eps = 1e-5, lim = 1e9;
+  auto lo = [&](double v) { return int(std::clamp(std::floor((v - eps) / step) * step - support, -lim, lim)); };
+  auto hi = [&](double v) { return int(std::clamp(std::ceil((v + eps) / step) * step + support, -lim, lim)); };
+  return {lo(a.x), lo(a.y), hi(b.x), hi(b.y)};
 }
 
 QueryNeeds QueryNeeds::forRects(const Displacement& d, const std::vector<Rect>& uvBoxes) {

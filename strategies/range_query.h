@@ -56,8 +56,10 @@ class RangeQuery {
   virtual ~RangeQuery() = default;
 
   virtual std::string_view name() const = 0;
-  // Heights (scale and bias applied) over the micro-geometry on `uv`. Level of detail:
-  // only lod 0 (the full-resolution micro-geometry) is defined; see docs/decisions.md.
+  // Heights (scale and bias applied) over the micro-geometry on `uv`; at a level of
+  // detail lod > 0 over the surface at that λ (docs/lod.md), conservatively: the raw
+  // range of the level-0 samples snapAtLod names. A structure built on a displacement
+  // already at a level of detail answers lod 0 only.
   virtual Interval query(const Rect& uv, float lod = 0.0f) const = 0;
   // Raw texel bounds over a sample range: the strategy's core.
   virtual Interval rawRange(const SampleRange& r) const = 0;
@@ -94,6 +96,12 @@ class RangeQuery {
             int(std::ceil(b.y + eps))};
   }
 
+  // The level-0 samples the surface at λ = lod reads over the cells `uv` touches:
+  // level ⌈λ⌉'s cells (the coarsest level its heights come from; every finer level's
+  // cells lie within them, the grids nest), widened on each side by the tent cascade's
+  // support, 2^⌈λ⌉ − 1 level-0 samples. λ is clamped to the map's last level.
+  SampleRange snapAtLod(const Rect& uv, float lod) const;
+
  protected:
   Displacement disp_;
   QueryNeeds needs_;
@@ -113,12 +121,10 @@ class RangeQueryImpl : public RangeQuery {
   }
 };
 
-void throwLodUnsupported(std::string_view strategy, float lod);
-
 template <typename Self>
 Interval RangeQueryImpl<Self>::query(const Rect& uv, float lod) const {
-  if (lod != 0.0f) throwLodUnsupported(name(), lod);
-  return queryFast(uv);
+  if (lod == 0.0f) return queryFast(uv);
+  return disp_.toHeight(static_cast<const Self*>(this)->rawRangeFast(snapAtLod(uv, lod)));
 }
 
 struct RangeQueryContext {
