@@ -99,7 +99,8 @@ Displacement atLevel0(const Displacement& d) {
 }
 
 Displacement atLod(const Displacement& d, float lambda) {
-  if (!(lambda >= 0.0f) || !std::isfinite(lambda)) fail(d.map->name(), "level of detail must be a finite number >= 0, got {}", lambda);
+  if (!(lambda >= 0.0f) || !std::isfinite(lambda))
+    fail(d.map->name(), "level of detail must be a finite number >= 0, got {}", lambda);
   Displacement r = atLevel0(d);
   const float l = std::min(lambda, float(lodLevels(*r.map)));
   if (l == 0.0f) return r;
