@@ -47,16 +47,21 @@ def run(ctx):
     scenes = ctx.pick(["paper/terracotta_roof", "paper/diving_helmet"], ["sphere"])
     lods = ctx.pick([0, 0.5, 1, 1.5, 2, 3, 4, 5, 6], [0, 1.5, 3])
     size = ctx.pick((320, 240), (48, 36))
+    small = ctx.pick((80, 60), (16, 12))  # the same view with 16x the texels per pixel
     check = ctx.pick((96, 72), (24, 18))
     ref_spp = ctx.pick(64, 4)
     reps = ctx.reps(3, 1)
     wh = f"{size[0]}x{size[1]}"
+    swh = f"{small[0]}x{small[1]}"
     jobs, setup, failures = [], {}, []
     for s in scenes:
         doc = C.load_scene(C.scene_path(s))
         ref_path = ctx.tmp(f"{C.short(s)}_ref.pfm")
         ref = C.run_oblong(ctx, "render", C.scene_path(s), ["--integrator", "primary", "--spp", ref_spp, "--size", wh,
                                                             "-o", ref_path], label=f"{s}/reference", threads=2)
+        C.run_oblong(ctx, "render", C.scene_path(s), ["--integrator", "primary", "--spp", ref_spp, "--size", swh,
+                                                      "-o", ctx.tmp(f"{C.short(s)}_ref_small.pfm")],
+                     label=f"{s}/reference_small", threads=2)
         rays = R.camera_rays(doc, *check)
         rays_path = ctx.tmp(f"{C.short(s)}_check.bin")
         R.write_rays(rays_path, rays)
@@ -72,11 +77,16 @@ def run(ctx):
                                        R.read_hits(ctx.tmp(f"{C.short(s)}_{lam:g}_canonical.csv")), rays)
                 if exact[lam]["mismatches"]:
                     failures.append(f"{s} at lod {lam:g}: {exact[lam]['mismatches']} mismatches against the oracle")
+            # Error only (deterministic; not timed): the small image.
+            C.run_oblong(ctx, "render", C.scene_path(s), ["--lod", lam, "--integrator", "primary", "--size", swh,
+                                                          "-o", ctx.tmp(f"{C.short(s)}_{lam:g}_small.pfm")],
+                         label=f"{s}/small", threads=2)
             for integ in ("primary", "path"):
                 jobs.append((f"{s}/{lam:g}/{integ}", "render", C.scene_path(s),
                              ["--lod", lam, "--integrator", integ, "--size", wh,
                               "-o", ctx.tmp(f"{C.short(s)}_{lam:g}_{integ}.pfm")]))
-        setup[s] = {"ref": read_pfm(ref_path), "ref_s": ref.seconds, "exact": exact, "map": C.map_size(doc)}
+        setup[s] = {"ref": read_pfm(ref_path), "ref_small": read_pfm(ctx.tmp(f"{C.short(s)}_ref_small.pfm")),
+                    "ref_s": ref.seconds, "exact": exact, "map": C.map_size(doc)}
         ctx.log(f"{s}: reference {wh} at {ref_spp} spp in {ref.seconds:.1f} s (2 threads); oracle check "
                 f"{check[0]}x{check[1]} rays at {len(lods) - 1} λ > 0: "
                 f"{sum(e['mismatches'] for e in exact.values())} mismatches")
@@ -90,6 +100,7 @@ def run(ctx):
             p, q = res[f"{s}/{lam:g}/primary"], res[f"{s}/{lam:g}/path"]
             img = read_pfm(ctx.tmp(f"{C.short(s)}_{lam:g}_primary.pfm"))  # deterministic (same seed every round)
             err = np.abs(img - su["ref"]).mean(axis=2)
+            err_small = np.abs(read_pfm(ctx.tmp(f"{C.short(s)}_{lam:g}_small.pfm")) - su["ref_small"]).mean(axis=2)
             st, sq = p[0].stats, q[0].stats
             lod_used = st["config"]["lod"]
             per = [x for x in lod_used["per_mesh"] if x is not None] if isinstance(lod_used, dict) else [0.0]
@@ -104,12 +115,13 @@ def run(ctx):
                          "range_bytes": C.range_bytes(st), "total_bytes": C.total_bytes(st),
                          "peak_bytes": int(st.get("peak_memory", 0)),
                          "error_mean": float(err.mean()), "error_max": float(err.max()),
+                         "error_mean_small": float(err_small.mean()), "error_max_small": float(err_small.max()),
                          "oracle_rays": e["rays"], "oracle_hits": e["oracle_hits"], "mismatches": e["mismatches"],
                          "rounds": len(p)})
     C.write_csv(ctx.out / "results.csv", rows)
 
     plt = C.plt()
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.4))
+    fig, axes = plt.subplots(1, 4, figsize=(20, 4.4))
     for s in scenes:
         pts = [r for r in rows if r["scene"] == s]
         t0 = pts[0]["primary_s_median"]
@@ -130,6 +142,9 @@ def run(ctx):
                      label=f"{C.short(s)}: range query")
         axes[2].plot([r["lod"] for r in pts], [r["total_bytes"] / 2**20 for r in pts], "s--",
                      label=f"{C.short(s)}: all structures")
+        axes[3].plot([r["lod"] for r in pts], [r["error_mean"] for r in pts], "o-", label=f"{C.short(s)}: {wh}")
+        axes[3].plot([r["lod"] for r in pts], [r["error_mean_small"] for r in pts], "s--",
+                     label=f"{C.short(s)}: {swh} (16× texels per pixel)")
     axes[0].set_xlabel("primary render time / time at λ = 0 (1 thread, median)")
     axes[0].set_ylabel(f"per-pixel error vs {ref_spp}-spp λ=0 reference")
     axes[0].set_yscale("log")
@@ -142,6 +157,10 @@ def run(ctx):
     axes[2].set_ylabel("MiB")
     axes[2].set_yscale("log")
     axes[2].set_title("memory against λ")
+    axes[3].set_xlabel("λ")
+    axes[3].set_ylabel(f"mean per-pixel error vs {ref_spp}-spp λ=0 reference")
+    axes[3].set_yscale("log")
+    axes[3].set_title("1-spp primary image error against λ, two image sizes")
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=6.5)
@@ -149,7 +168,7 @@ def run(ctx):
     fig.savefig(ctx.out / "lod.png")
 
     header = ["scene", "λ", "primary s", "× λ=0", "path s", "× λ=0", "steps/camera ray", "range query",
-              "mean error", "max error", "oracle mismatches"]
+              "mean error", "max error", f"mean error {swh}", "oracle mismatches"]
     trows = []
     for s in scenes:
         pts = [r for r in rows if r["scene"] == s]
@@ -158,17 +177,20 @@ def run(ctx):
                           f"{r['primary_s_median']:.3f}", f"{r['primary_s_median'] / pts[0]['primary_s_median']:.2f}",
                           f"{r['path_s_median']:.3f}", f"{r['path_s_median'] / pts[0]['path_s_median']:.2f}",
                           f"{r['steps_per_camera_ray']:.2f}", C.fmt_bytes(r["range_bytes"]),
-                          f"{r['error_mean']:.4f}", f"{r['error_max']:.3f}",
+                          f"{r['error_mean']:.4f}", f"{r['error_max']:.3f}", f"{r['error_mean_small']:.4f}",
                           f"{r['mismatches']} / {r['oracle_rays']}" if r["oracle_rays"] else "–"])
     parts = []
     for s in scenes:
         pts = [r for r in rows if r["scene"] == s]
         best = min(pts, key=lambda r: r["error_mean"])
+        bsm = min(pts, key=lambda r: r["error_mean_small"])
         last = pts[-1]
         parts.append(f"{C.short(s)}: lowest mean error at λ={best['lod']:g} ({best['error_mean']:.4f} vs "
                      f"{pts[0]['error_mean']:.4f} at λ=0, time ×{best['primary_s_median'] / pts[0]['primary_s_median']:.2f}); "
                      f"at λ={last['lod']:g} steps/camera ray {pts[0]['steps_per_camera_ray']:.1f} → "
-                     f"{last['steps_per_camera_ray']:.1f}, path time ×{last['path_s_median'] / pts[0]['path_s_median']:.2f}")
+                     f"{last['steps_per_camera_ray']:.1f}, path time ×{last['path_s_median'] / pts[0]['path_s_median']:.2f}; "
+                     f"at {swh}: lowest mean error at λ={bsm['lod']:g} ({bsm['error_mean_small']:.4f} vs "
+                     f"{pts[0]['error_mean_small']:.4f} at λ=0)")
     verdict = "; ".join(parts) + "."
     if failures:
         return {"status": "mismatch", "verdict": "exactness at λ FAILED: " + "; ".join(failures),
