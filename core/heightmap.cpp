@@ -191,22 +191,22 @@ float Displacement::bilinear(const vec2& uv) const {
   return scale * (H + bias);
 }
 
-float Displacement::microAtSample(const dvec2& s) const {
+float Displacement::microAtSample(const dvec2& s, float f) const {
   const double fi = std::floor(s.x), fj = std::floor(s.y);
   const int i = int(fi), j = int(fj);
   const float fx = float(s.x - fi), fy = float(s.y - fj);
-  const float h00 = map->at(i, j), h11 = map->at(i + 1, j + 1);
+  const float h00 = raw(i, j, f), h11 = raw(i + 1, j + 1, f);
   float H;
   if (fx >= fy) {  // lower triangle (i,j), (i+1,j), (i+1,j+1)
-    const float h10 = map->at(i + 1, j);
+    const float h10 = raw(i + 1, j, f);
     H = h00 + fx * (h10 - h00) + fy * (h11 - h10);
   } else {  // upper triangle (i,j), (i+1,j+1), (i,j+1)
-    const float h01 = map->at(i, j + 1);
+    const float h01 = raw(i, j + 1, f);
     H = h00 + fy * (h01 - h00) + fx * (h11 - h01);
   }
   return scale * (H + bias);
 }
 
-float Displacement::micro(const vec2& uv) const { return microAtSample(toSample(uv)); }
+float Displacement::micro(const vec2& uv, float f) const { return microAtSample(toSample(uv), f); }
 
 }  // namespace oblong

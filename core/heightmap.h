@@ -9,6 +9,7 @@
 #include "core/math.h"
 #include "core/memory.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -72,6 +73,11 @@ struct Displacement {
   float lod = 0.0f;
   double sampleOffset = 0.5;
   std::shared_ptr<const HeightMap> level0{};
+  // Per-ray level of detail (docs/lod.md, "A λ per ray"): `map` is level k = lod's own
+  // map and `next` level k + 1's; a ray at λ = k + f reads the heights of the surface at
+  // λ, blended on the fly (raw(i, j, f)), bit for bit those of heightsAtLod(λ). Null
+  // otherwise (one surface for every ray).
+  std::shared_ptr<const HeightMap> next{};
 
   // Continuous sample coordinates of a uv: at level 0 the texel centre of texel (i, j)
   // is (i, j).
@@ -85,8 +91,36 @@ struct Displacement {
                 float((j + sampleOffset) / (double(map->height()) * tiling.y)));
   }
 
+  // The blend fraction f of a ray at level of detail `rayLod` (< 0: none) on this
+  // displacement: 0 unless it blends per ray.
+  float blendOf(float rayLod) const {
+    if (!next || !(rayLod > lod)) return 0.0f;
+    return std::min(float(double(rayLod) - double(lod)), 1.0f);
+  }
+  // Raw height of sample (i, j) for a ray with blend fraction f (blendOf).
+  float raw(int i, int j, float f) const {
+    if (next) [[unlikely]] return lodHeight(*map, *next, i, j, f);
+    return map->at(i, j);
+  }
+  // The height at level k's point (i, j) of the surface at λ = k + f: level k's height
+  // blended toward level k + 1's micro-geometry there (docs/lod.md); each step clamped
+  // into the values it is made of, so float rounding never leaves their range.
+  static float lodHeight(const HeightMap& level, const HeightMap& next, int i, int j, float f) {
+    const float h = level.at(i, j);
+    if (f == 0.0f) return h;
+    // Level k + 1 at level k's point (i/2, j/2): a coarse sample, the middle of a coarse
+    // cell edge, or (both odd) the middle of the cell's diagonal (a, b)-(a+1, b+1),
+    // which the micro-geometry's split puts in both of its triangles.
+    const int a = i >> 1, b = j >> 1;
+    const float p = next.at(a, b);
+    const float q = !(i & 1) && !(j & 1) ? p : !(j & 1) ? next.at(a + 1, b) : !(i & 1) ? next.at(a, b + 1)
+                                                                                   : next.at(a + 1, b + 1);
+    const float L = std::clamp(0.5f * (p + q), std::min(p, q), std::max(p, q));
+    return std::clamp((1.0f - f) * h + f * L, std::min(h, L), std::max(h, L));
+  }
+
   // Height of one sample point (grid vertex of the micro-geometry).
-  float sampleHeight(int i, int j) const { return scale * (map->at(i, j) + bias); }
+  float sampleHeight(int i, int j, float f = 0.0f) const { return scale * (raw(i, j, f) + bias); }
   // Raw texel interval -> height interval (scale may be negative).
   Interval toHeight(const Interval& raw) const {
     const float a = scale * (raw.lo + bias), b = scale * (raw.hi + bias);
@@ -97,8 +131,8 @@ struct Displacement {
   float bilinear(const vec2& uv) const;
   // The micro-geometry's height: piecewise linear on the two triangles of each grid
   // cell split by the diagonal (i,j)-(i+1,j+1). Equal to bilinear() at grid points.
-  float micro(const vec2& uv) const;
-  float microAtSample(const dvec2& s) const;
+  float micro(const vec2& uv, float f = 0.0f) const;
+  float microAtSample(const dvec2& s, float f = 0.0f) const;
 };
 
 }  // namespace oblong

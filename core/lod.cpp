@@ -72,20 +72,9 @@ HeightMap heightsAtLod(const HeightMap& level0, double lambda) {
             fmt::format("{}x{} float texels", level.width(), level.height()));
   std::vector<float> out(level.texels().size());
   const int W = level.width(), H = level.height();
+  // Displacement::lodHeight is the formula, shared with the per-ray blend (bit for bit).
   for (int j = 0; j < H; ++j)
-    for (int i = 0; i < W; ++i) {
-      // L_{k+1} at level-k point (i, j) = level-(k+1) point (i/2, j/2): a coarse sample,
-      // the middle of a coarse cell edge, or (both odd) the middle of the cell's diagonal
-      // (a, b)-(a+1, b+1), which the micro-geometry's split puts in both of its triangles.
-      // Every value stays within the values it is made of (as in downsampleLevel).
-      const int a = i >> 1, b = j >> 1;
-      const float p = next.at(a, b);
-      const float q = !(i & 1) && !(j & 1) ? p : !(j & 1) ? next.at(a + 1, b) : !(i & 1) ? next.at(a, b + 1)
-                                                                                     : next.at(a + 1, b + 1);
-      const float L = std::clamp(0.5f * (p + q), std::min(p, q), std::max(p, q));
-      const float h = level.atUnchecked(i, j);
-      out[size_t(j) * W + i] = std::clamp((1.0f - f) * h + f * L, std::min(h, L), std::max(h, L));
-    }
+    for (int i = 0; i < W; ++i) out[size_t(j) * W + i] = Displacement::lodHeight(level, next, i, j, f);
   return HeightMap(W, H, std::move(out), name);
 }
 
@@ -93,6 +82,7 @@ Displacement atLevel0(const Displacement& d) {
   Displacement r = d;
   if (d.level0) r.map = d.level0;
   r.level0.reset();
+  r.next.reset();
   r.lod = 0.0f;
   r.sampleOffset = 0.5;
   return r;
@@ -109,6 +99,32 @@ Displacement atLod(const Displacement& d, float lambda) {
   r.map = std::make_shared<const HeightMap>(heightsAtLod(*r.level0, l));
   r.lod = l;
   r.sampleOffset = std::ldexp(0.5, -k);
+  return r;
+}
+
+std::vector<std::shared_ptr<const HeightMap>> lodPyramid(const std::shared_ptr<const HeightMap>& level0) {
+  std::vector<std::shared_ptr<const HeightMap>> levels{level0};
+  for (int k = 0, K = lodLevels(*level0); k < K; ++k)
+    levels.push_back(std::make_shared<const HeightMap>(downsampleLevel(*levels.back())));
+  return levels;
+}
+
+Displacement lodBand(const Displacement& level0, const std::vector<std::shared_ptr<const HeightMap>>& levels, int k) {
+  Displacement r = atLevel0(level0);
+  r.level0 = levels[0];
+  r.map = levels[size_t(k)];
+  r.next = size_t(k) + 1 < levels.size() ? levels[size_t(k) + 1] : nullptr;
+  r.lod = float(k);
+  r.sampleOffset = std::ldexp(0.5, -k);
+  return r;
+}
+
+Displacement lodNextLevel(const Displacement& band) {
+  Displacement r = band;
+  r.map = band.next;
+  r.next.reset();
+  r.lod = band.lod + 1.0f;
+  r.sampleOffset = band.sampleOffset * 0.5;
   return r;
 }
 

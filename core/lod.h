@@ -17,6 +17,7 @@
 #include "core/heightmap.h"
 
 #include <memory>
+#include <vector>
 
 namespace oblong {
 
@@ -36,5 +37,15 @@ Displacement atLod(const Displacement& d, float lambda);
 
 // The level-0 displacement of a displacement at any λ.
 Displacement atLevel0(const Displacement& d);
+
+// Levels 0 .. lodLevels(level0) of a map (level 0 is the map itself).
+std::vector<std::shared_ptr<const HeightMap>> lodPyramid(const std::shared_ptr<const HeightMap>& level0);
+
+// Level k's displacement for per-ray blending (Displacement::next): `levels` from
+// lodPyramid, k <= its last level (the last level has no next).
+Displacement lodBand(const Displacement& level0, const std::vector<std::shared_ptr<const HeightMap>>& levels, int k);
+
+// The level k + 1 displacement of a per-ray band at level k.
+Displacement lodNextLevel(const Displacement& band);
 
 }  // namespace oblong

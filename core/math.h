@@ -34,6 +34,9 @@ struct Ray {
   vec3 d{0.0f, 0.0f, 1.0f};
   float tmin = 0.0f;
   float tmax = kInfinity;
+  // The ray's level of detail under a per-ray rule (docs/lod.md); < 0: none (the
+  // displacements' own surface).
+  float lod = -1.0f;
   vec3 at(float t) const { return o + t * d; }
 };
 

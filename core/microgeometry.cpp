@@ -30,7 +30,7 @@ PV grid(int i, int j, Line next) {
 
 }  // namespace
 
-MicroCells::MicroCells(const DisplacedTriangle& tri, const Displacement& disp) : T_(tri), d_(disp) {
+MicroCells::MicroCells(const DisplacedTriangle& tri, const Displacement& disp, float f) : T_(tri), d_(disp), f_(f) {
   for (int k = 0; k < 3; ++k) S_[k] = d_.toSample(T_.t[k]);
   for (int e = 0; e < 3; ++e) {
     int A = e, B = (e + 1) % 3;
@@ -76,25 +76,29 @@ MicroVertex MicroCells::onEdge(int e, double t, float rawHeight) const {
 
 // Raw height on grid line L at sample point s (linear between the line's samples).
 float MicroCells::lineHeight(const Line& L, const dvec2& s) const {
-  const HeightMap& m = *d_.map;
+  const Displacement& d = d_;
+  const float g = f_;
   if (L.type == LineType::V) {
     const int j = int(std::floor(s.y));
     const float f = float(s.y - j);
-    return m.at(L.c, j) + f * (m.at(L.c, j + 1) - m.at(L.c, j));
+    const float a = d.raw(L.c, j, g);
+    return a + f * (d.raw(L.c, j + 1, g) - a);
   }
   if (L.type == LineType::H) {
     const int i = int(std::floor(s.x));
     const float f = float(s.x - i);
-    return m.at(i, L.c) + f * (m.at(i + 1, L.c) - m.at(i, L.c));
+    const float a = d.raw(i, L.c, g);
+    return a + f * (d.raw(i + 1, L.c, g) - a);
   }
   const int j = int(std::floor(s.y)), i = j + L.c;
   const float f = float(s.y - j);
-  return m.at(i, j) + f * (m.at(i + 1, j + 1) - m.at(i, j));
+  const float a = d.raw(i, j, g);
+  return a + f * (d.raw(i + 1, j + 1, g) - a);
 }
 
 // A grid point not on any edge of T: T's barycentrics of its uv.
 MicroVertex MicroCells::gridInterior(int i, int j) const {
-  const float raw = d_.map->at(i, j);
+  const float raw = d_.raw(i, j, f_);
   const vec2 uv = d_.sampleToUV(i, j);
   const vec2 b = T_.baryOfUV(uv);
   const vec3 N = T_.N(b.x, b.y);
@@ -105,7 +109,7 @@ MicroVertex MicroCells::world(const PV& v, GridVertexCache* cache) const {
   switch (v.kind) {
     case Kind::TVertex: {
       const int k = v.a;
-      const float h = d_.microAtSample(S_[k]);
+      const float h = d_.microAtSample(S_[k], f_);
       return {T_.p[k] + h * T_.n[k], T_.t[k]};  // n[k] is unit
     }
     case Kind::Cross: {
@@ -120,7 +124,7 @@ MicroVertex MicroCells::world(const PV& v, GridVertexCache* cache) const {
         if (orient(E_[e].SA, E_[e].SB, v.s) == 0.0) {
           const dvec2 ab = E_[e].SB - E_[e].SA;
           const double t = std::clamp(glm::dot(v.s - E_[e].SA, ab) / glm::dot(ab, ab), 0.0, 1.0);
-          return onEdge(e, t, d_.map->at(v.a, v.b));
+          return onEdge(e, t, d_.raw(v.a, v.b, f_));
         }
       return cache ? gridInterior(v.a, v.b, *cache) : gridInterior(v.a, v.b);
     }

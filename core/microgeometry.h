@@ -86,7 +86,9 @@ class MicroCells {
   // A cell triangle clipped by T has at most 6 vertices (4 fan triangles); two halves.
   static constexpr int kMaxPerCell = 8;
 
-  MicroCells(const DisplacedTriangle& T, const Displacement& d);
+  // f: the blend fraction of a ray's level of detail (Displacement::blendOf; 0 when the
+  // displacement has one surface for every ray).
+  MicroCells(const DisplacedTriangle& T, const Displacement& d, float f = 0.0f);
 
   // Writes the micro-triangles of cell (i,j) (absolute sample indices; the map wraps)
   // to out in the order forEachMicroTriangle emits them; returns how many (0 for a cell
@@ -115,6 +117,7 @@ class MicroCells {
 
   const DisplacedTriangle& T_;
   const Displacement& d_;
+  float f_;
   dvec2 S_[3];
   micro::EdgeInfo E_[3];  // edge e joins vertices e and (e+1)%3
 };

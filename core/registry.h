@@ -28,6 +28,9 @@ struct StrategyTraits {
   std::string summary;  // one line for --help and `oblong info --strategies`
   // Not exact by design (a baseline such as fixedstep): left out of the exactness tests.
   bool approximate = false;
+  // A baseline that takes a level of detail per ray (Ray::lod; docs/lod.md): the
+  // traversal does, and so must an oracle checked against it.
+  bool perRayLod = false;
 };
 
 template <typename Base, typename Ctx>

@@ -465,7 +465,8 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
   }
   if (top.has("strategies")) {
     const Reader st = top.object("strategies");
-    st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal", "lod"});
+    st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal", "lod",
+                  "lod_bias"});
     parseStrategy(st, "range", s.range);
     parseStrategy(st, "inverter", s.inverter);
     parseStrategy(st, "splitter", s.splitter);
@@ -478,9 +479,16 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
     if (st.has("lod")) {
       const json& v = st.at("lod");
       if (v.is_string() && v.get<std::string>() == "off") s.lod.reset();
+      else if (v.is_string() && v.get<std::string>() == "cone") s.lod.reset(), s.lodCone = true;
       else if (v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0.0)
         s.lod = float(std::min(v.get<double>(), 64.0));  // no map has more levels; clamped per map anyway
-      else st.errorAt("lod", "must be \"off\" or a level of detail >= 0 (a number), got {}", shown(v));
+      else st.errorAt("lod", "must be \"off\", \"cone\" or a level of detail >= 0 (a number), got {}", shown(v));
+    }
+    if (st.has("lod_bias")) {
+      const json& v = st.at("lod_bias");
+      if (!v.is_number() || !std::isfinite(v.get<double>()) || std::abs(v.get<double>()) > 64.0)
+        st.errorAt("lod_bias", "must be a number of levels in [-64, 64], got {}", shown(v));
+      s.lodBias = float(v.get<double>());
     }
   }
   top.require("meshes");
@@ -607,6 +615,12 @@ void setLod(Scene& scene, std::optional<float> lod, const std::string& where) {
     d.map = shared.map, d.level0 = shared.level0, d.lod = shared.lod, d.sampleOffset = shared.sampleOffset;
   }
   scene.lod = lod;
+  scene.lodCone = false;
+}
+
+void setLodCone(Scene& scene) {
+  setLod(scene, std::nullopt, "lod");
+  scene.lodCone = true;
 }
 
 }  // namespace oblong

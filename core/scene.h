@@ -62,6 +62,10 @@ struct Scene {
   // λ >= 0 for the whole scene, clamped per map to its last level. The meshes'
   // displacements are already at it (setLod).
   std::optional<float> lod;
+  // "cone": a λ per ray from its ray cone (docs/lod.md, "A λ per ray"), the displacements
+  // at level 0 and every level built by the intersectors; lodBias is added to each λ.
+  bool lodCone = false;
+  float lodBias = 0.0f;
   ivec2 imageSize{640, 480};
 };
 
@@ -75,6 +79,8 @@ Scene parseScene(const nlohmann::json& j, const std::string& path);
 // sharing a map share the level built for them. Throws oblong::Error (naming `where`)
 // for a negative or non-finite λ.
 void setLod(Scene& scene, std::optional<float> lod, const std::string& where);
+// A λ per ray (ray cones): every displaced mesh back at level 0, scene.lodCone set.
+void setLodCone(Scene& scene);
 
 // The built-in default scene: no data files (procedural map, generated meshes).
 Scene defaultScene();

@@ -3,6 +3,8 @@
 
 #include "core/scene.h"
 
+#include <cmath>
+
 namespace oblong {
 
 class PinholeCamera {
@@ -10,6 +12,8 @@ class PinholeCamera {
   PinholeCamera(const Camera& c, ivec2 size);
   // (px, py) continuous pixel coordinates, (0,0) top-left corner of the image.
   Ray generate(float px, float py) const;
+  // The angle one pixel subtends at the image centre (a ray cone's spread).
+  float pixelSpread() const { return std::atan(2.0f * tanHalf_ / float(size_.y)); }
 
  private:
   vec3 o_, forward_, right_, up_;

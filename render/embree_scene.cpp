@@ -191,16 +191,17 @@ Patch tessellate(const DisplacedTriangle& T, const Displacement& d, const PatchS
 }
 
 // Embree passes our context through to the user-geometry callbacks: the standard way
-// to carry per-ray data (here the traversal counters) into them.
+// to carry per-ray data (the traversal counters, the ray's level of detail) into them.
 struct Context {
   RTCIntersectContext ctx;
   RayCounters* counters;
+  float lod;
 };
 
 // A ray in the mesh's frame: the origin minus the frame's, rounded once (exact when the
 // two are within a factor 2^29 of each other; the direction and t are unchanged).
 Ray toFrame(const Ray& r, const dvec3& origin) {
-  return Ray{vec3(dvec3(r.o) - origin), r.d, r.tmin, r.tmax};
+  return Ray{vec3(dvec3(r.o) - origin), r.d, r.tmin, r.tmax, r.lod};
 }
 
 void userBounds(const RTCBoundsFunctionArguments* args) {
@@ -237,14 +238,15 @@ void userIntersect(const void* argsPtr) {
   if constexpr (Occluded) {
     RTCRay* ray = reinterpret_cast<RTCRay*>(args->ray);
     const Ray r = toFrame(Ray{vec3(ray->org_x, ray->org_y, ray->org_z), vec3(ray->dir_x, ray->dir_y, ray->dir_z),
-                              ray->tnear, ray->tfar},
+                              ray->tnear, ray->tfar, ctx->lod},
                           ug->origin);
     TriangleHit h;
     if (is->intersect(r, args->primID, h, c)) ray->tfar = -kInfinity;
   } else {
     RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
     const Ray r = toFrame(Ray{vec3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z),
-                              vec3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z), rh->ray.tnear, rh->ray.tfar},
+                              vec3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z), rh->ray.tnear, rh->ray.tfar,
+                              ctx->lod},
                           ug->origin);
     TriangleHit h;
     if (!is->intersect(r, args->primID, h, c) || !(h.t < rh->ray.tfar)) return;
@@ -290,6 +292,7 @@ TraversalConfig traversalConfigOf(const Scene& scene) {
   c.baselineParams = scene.baseline.params;
   c.marchingScale = scene.marchingScale;
   c.inversionInTraversal = scene.inversionInTraversal;
+  c.lodPerRay = scene.lodCone;
   return c;
 }
 
@@ -336,8 +339,10 @@ EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
 
 void EmbreeScene::release() {
   if (scene_) rtcReleaseScene(scene_);
+  if (lodBase_) rtcReleaseScene(lodBase_);
   if (device_) rtcReleaseDevice(device_);
   scene_ = nullptr;
+  lodBase_ = nullptr;
   device_ = nullptr;
 }
 
@@ -349,6 +354,10 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
   scene_ = rtcNewScene(device_);
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);  // no cracks between shared edges
 
+  if (opts.tessellate && opts.traversal.lodPerRay)
+    fail(scene.path, "the pre-tessellated baseline builds one surface: a level of detail per ray (--lod cone) "
+                     "needs the traversal or --baseline bruteforce (or a fixed --lod)");
+  if (opts.traversal.lodPerRay) buildLodBase(scene);
   // The pre-tessellation baseline is refused before anything is built when its
   // micro-triangles, their buffers and Embree's BVH would not fit.
   std::vector<std::vector<PatchSize>> sizes(scene.meshes.size());
@@ -472,10 +481,66 @@ EmbreeScene::UpdateTimes EmbreeScene::update(int mesh, const SampleRange& change
 
 EmbreeScene::~EmbreeScene() { release(); }
 
+void EmbreeScene::buildLodBase(const Scene& scene) {
+  lodBase_ = rtcNewScene(device_);
+  for (const SceneMesh& sm : scene.meshes) {
+    if (!sm.displacement) continue;
+    const Mesh& mesh = sm.mesh;
+    const Displacement& d = *sm.displacement;
+    const HeightMap& m = d.level0 ? *d.level0 : *d.map;
+    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), mesh.positions.size()));
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+      const vec3 p(mesh.world(i));
+      v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
+    }
+    auto* idx = static_cast<glm::uvec3*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                 sizeof(glm::uvec3), mesh.triangles.size()));
+    std::vector<float> texel(mesh.triangles.size(), kInfinity);
+    // Texels per uv unit, as Displacement::toSample maps them.
+    const double texelsPerUV = double(m.width()) * d.tiling.x * double(m.height()) * d.tiling.y;
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      idx[t] = mesh.triangles[t];
+      const DisplacedTriangle T = mesh.triangle(t);
+      const double uvArea = 0.5 * std::abs(double(T.uvArea2)) * std::abs(texelsPerUV);
+      if (uvArea > 0 && T.area > 0) texel[t] = float(std::sqrt(double(T.area) / uvArea));
+    }
+    rtcCommitGeometry(geom);
+    const unsigned id = rtcAttachGeometry(lodBase_, geom);
+    rtcReleaseGeometry(geom);
+    if (lodTexel_.size() <= id) lodTexel_.resize(id + 1);
+    lodTexel_[id] = std::move(texel);
+  }
+  rtcCommitScene(lodBase_);
+}
+
+float EmbreeScene::coneLod(const Ray& r, const RayCone& c, float bias) const {
+  if (!lodBase_) return 0.0f;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh{};
+  rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
+  rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
+  rh.ray.tnear = r.tmin;
+  rh.ray.tfar = r.tmax;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(lodBase_, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0.0f;
+  const float texel = lodTexel_[rh.hit.geomID][rh.hit.primID];
+  const vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+  const float cosine = std::abs(glm::dot(ng, r.d)) / (glm::length(ng) * glm::length(r.d));
+  const float width = c.at(rh.ray.tfar).width;
+  const float l = bias + std::log2(width / (texel * std::max(cosine, 1e-6f)));
+  return l > 0.0f ? std::min(l, 64.0f) : 0.0f;  // NaN (an empty cone on a degenerate triangle): 0
+}
+
 Hit EmbreeScene::intersect(const Ray& r, RayCounters* counters) const {
   Context ctx;
   rtcInitIntersectContext(&ctx.ctx);
   ctx.counters = counters;
+  ctx.lod = r.lod;
   RTCRayHit rh{};
   rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
   rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
@@ -507,6 +572,7 @@ bool EmbreeScene::occluded(const Ray& r, RayCounters* counters) const {
   Context ctx;
   rtcInitIntersectContext(&ctx.ctx);
   ctx.counters = counters;
+  ctx.lod = r.lod;
   RTCRay ray{};
   ray.org_x = r.o.x, ray.org_y = r.o.y, ray.org_z = r.o.z;
   ray.dir_x = r.d.x, ray.dir_y = r.d.y, ray.dir_z = r.d.z;

@@ -75,6 +75,9 @@ struct TraversalConfig {
   // marching, approximate). The "tessellated" baseline is not an Intersector: it is
   // EmbreeScene.
   std::string baseline;
+  // A level of detail per ray (Ray::lod; docs/lod.md): one intersector per level of the
+  // map, each blending toward the next with the ray's fraction (createIntersector).
+  bool lodPerRay = false;
   float fixedStep = 0.0f;  // world-space step of "fixedstep" (0: one texel's world size)
   nlohmann::json baselineParams = nlohmann::json::object();  // the baseline's own parameters
   // Strategy parameters by strategy (JSON objects), e.g. rmip: {"resolution": 0.5}.

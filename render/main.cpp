@@ -113,11 +113,13 @@ struct StrategyFlags {
   std::optional<float> marchingScale, step;
   std::optional<bool> inversionInTraversal;
   std::string lod;  // empty: the scene's
+  std::optional<float> lodBias;
 
   void add(CLI::App* app) {
     app->add_option("--lod", lod,
-                    "level of detail: off | a number >= 0, clamped to each map's last level (docs/lod.md; default: "
-                    "the scene's, off)");
+                    "level of detail: off | cone (a λ per ray from its ray cone; render only) | a number >= 0, "
+                    "clamped to each map's last level (docs/lod.md; default: the scene's, off)");
+    app->add_option("--lod-bias", lodBias, "levels added to each ray's λ under --lod cone (default: the scene's, 0)");
     app->add_option("--range", range, "RangeQuery: " + strategyChoices(StrategyKind::Range));
     app->add_option("--inverter", inverter, "Inverter: " + strategyChoices(StrategyKind::Inverter));
     app->add_option("--splitter", splitter, "Splitter: " + strategyChoices(StrategyKind::Splitter));
@@ -135,18 +137,30 @@ struct StrategyFlags {
 
   // --lod moves the scene's displaced meshes to that level of detail (from their
   // full-resolution maps), before anything is built for them.
-  void applyLod(Scene& scene) const {
-    if (!lod.empty()) {
+  // `perRay`: "" where a λ per ray can be traced (render on the CPU), else why not.
+  void applyLod(Scene& scene, const std::string& perRay = "") const {
+    if (lod == "cone") {
+      setLodCone(scene);
+    } else if (!lod.empty()) {
       std::optional<float> l;
       if (lod != "off") {
         float v = 0.0f;
         const auto [end, ec] = std::from_chars(lod.data(), lod.data() + lod.size(), v);
         if (ec != std::errc() || end != lod.data() + lod.size() || !std::isfinite(v) || v < 0.0f)
-          fail("--lod", "must be off or a level of detail >= 0 (a number), got '{}'", lod);
+          fail("--lod", "must be off, cone or a level of detail >= 0 (a number), got '{}'", lod);
         l = v;
       }
       setLod(scene, l, "--lod");
     }
+    if (lodBias) {
+      if (!scene.lodCone) fail("--lod-bias", "applies to --lod cone only (a λ per ray)");
+      if (!std::isfinite(*lodBias) || std::abs(*lodBias) > 64.0f)
+        fail("--lod-bias", "must be a number of levels in [-64, 64], got {}", *lodBias);
+      scene.lodBias = *lodBias;
+    }
+    if (scene.lodCone && !perRay.empty())
+      fail(lod == "cone" ? std::string("--lod") : scene.path + ": strategies.lod",
+           "cone (a λ per ray from its ray cone): {}; use render on the CPU, or a fixed level of detail", perRay);
     warnLodClamped(scene);
   }
 
@@ -216,6 +230,7 @@ nlohmann::json configJson(const AccelOptions& o) {
 
 // The scene's level of detail and, per displaced mesh, the λ it is traced at.
 nlohmann::json lodJson(const Scene& scene) {
+  if (scene.lodCone) return {{"requested", "cone"}, {"bias", scene.lodBias}};
   if (!scene.lod) return "off";
   nlohmann::json per = nlohmann::json::array();
   for (const SceneMesh& sm : scene.meshes)
@@ -282,7 +297,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   Progress progress(mode);
   progress.phase("loading " + (scenePath.empty() ? std::string("the built-in scene") : scenePath));
   Scene scene = sceneFrom(scenePath);
-  flags.applyLod(scene);
+  flags.applyLod(scene, deviceFlag == "vulkan" ? "the Vulkan path traces one surface per displacement" : "");
   const double loadSeconds = progress.elapsed();
   const AccelOptions accelOpts = flags.resolve(scene);
   if (f.size.empty()) opts.size = scene.imageSize;
@@ -381,7 +396,7 @@ int runBake(const std::string& scenePath, const std::string& out, const std::str
   checkOutputPath(out, "baked scene");
   checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}});
   Scene scene = sceneFrom(scenePath);
-  flags.applyLod(scene);
+  flags.applyLod(scene, "bake's rays carry no ray cones");
   const AccelOptions accelOpts = flags.resolve(scene);
   const ivec2 image = size.empty() ? scene.imageSize : parseSize(size);
   const std::vector<Ray> rays = raysPath.empty() ? std::vector<Ray>() : readRays(raysPath);
@@ -396,7 +411,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}, {"--stats", statsPath}});
   const auto start = std::chrono::steady_clock::now();
   Scene scene = sceneFrom(scenePath);
-  flags.applyLod(scene);
+  flags.applyLod(scene, "a rays file carries no ray cones");
   const AccelOptions accelOpts = flags.resolve(scene);
   const std::vector<Ray> rays = readRays(raysPath);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -553,7 +568,10 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
     fmt::print("    needs    : range queries up to {}x{} samples; wrapping queries {}\n", needs.maxExtentX,
                needs.maxExtentY,
                !needs.wrap ? "no" : tiled ? "yes (the map is tiled)" : "yes (triangles' cells cross the map border)");
-    if (!d.level0)
+    if (scene.lodCone)
+      fmt::print("    LoD      : cone (a λ per ray, bias {}): levels 0 .. {} built, one intersector each (docs/lod.md)\n",
+                 scene.lodBias, lodLevels(*d.map));
+    else if (!d.level0)
       fmt::print("    LoD      : off, no levels built ({} levels possible for this map, docs/lod.md)\n",
                  lodLevels(*d.map));
     else

@@ -31,6 +31,11 @@ struct Tracer {
   // Smooth normals: every mesh's triangles, prepared once (indexed by Hit::prim).
   std::vector<std::vector<DisplacedTriangle>> triangles;
 
+  // Under --lod cone, a ray's λ from its cone (EmbreeScene::coneLod); otherwise none.
+  void setLod(Ray& r, const RayCone& c) const {
+    if (scene.lodCone) r.lod = accel.coneLod(r, c, scene.lodBias);
+  }
+
   void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
     shadingNormals(scene, triangles, opts.normals, r, h, ngf, ns);
   }
@@ -38,7 +43,7 @@ struct Tracer {
 
   // Direct light from every light at p (geometric normal ng and shading normal n facing
   // the incoming ray).
-  vec3 direct(const vec3& p, const vec3& ng, const vec3& n, const vec3& albedo, RayCounters& c,
+  vec3 direct(const vec3& p, const vec3& ng, const vec3& n, const vec3& albedo, const RayCone& cone, RayCounters& c,
               int64_t& rays) const {
     vec3 L(0.0f);
     for (const Light& light : scene.lights) {
@@ -56,14 +61,18 @@ struct Tracer {
       const float cosTheta = glm::dot(n, wi);
       if (cosTheta <= 0 || glm::dot(ng, wi) <= 0) continue;  // the surface itself shadows p
       ++rays;
-      const Ray s{p + spawnEps(p) * ng, wi, 0.0f, dist * (1.0f - 1e-4f)};
+      Ray s{p + spawnEps(p) * ng, wi, 0.0f, dist * (1.0f - 1e-4f)};
+      setLod(s, cone);
       if (!accel.occluded(s, &c)) L += albedo * light.intensity * (cosTheta * falloff / kPi);
     }
     return L;
   }
 
-  // Radiance along a camera ray whose first hit is h.
-  vec3 shade(const Ray& r, const Hit& h, Rng& rng, RayCounters& c, int64_t& rays) const {
+  // Radiance along a camera ray with cone `cone` whose first hit is h. Cones widen
+  // along the path by their spread over each segment; bounces add no spread (the ray
+  // cones' curvature term is not modelled: the footprint is the flat-mirror one, the
+  // finest a bounce can give; docs/lod.md).
+  vec3 shade(const Ray& r, const Hit& h, const RayCone& cone, Rng& rng, RayCounters& c, int64_t& rays) const {
     if (!h.valid()) return opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
     vec3 ng, n;
     normals(r, h, ng, n);
@@ -73,16 +82,18 @@ struct Tracer {
       const vec3 d = cosineSample(n, rng);
       if (glm::dot(d, ng) <= 0) return vec3(0.0f);  // below the geometric surface: occluded
       ++rays;
-      const Ray a{spawn(p, ng, d), d, 0.0f, aoRadius};
+      Ray a{spawn(p, ng, d), d, 0.0f, aoRadius};
+      setLod(a, cone.at(h.t));
       return vec3(accel.occluded(a, &c) ? 0.0f : 1.0f);
     }
     // Path tracing: diffuse surfaces, NEE at every vertex, sky on escape.
     vec3 L(0.0f), beta(1.0f);
     vec3 pos = p, nrm = n, geo = ng;
     int mesh = h.mesh;
+    RayCone here = cone.at(h.t);
     for (int depth = 0;; ++depth) {
       const vec3 albedo = scene.meshes[size_t(mesh)].albedo;
-      L += beta * direct(pos, geo, nrm, albedo, c, rays);
+      L += beta * direct(pos, geo, nrm, albedo, here, c, rays);
       if (depth + 1 >= opts.maxDepth) break;
       beta *= albedo;  // cosine-weighted sampling of a Lambertian BRDF
       if (depth >= 3) {
@@ -92,7 +103,8 @@ struct Tracer {
       }
       const vec3 d = cosineSample(nrm, rng);
       if (glm::dot(d, geo) <= 0) break;  // into the surface (smooth normals only): absorbed
-      const Ray b{spawn(pos, geo, d), d, 0.0f, kInfinity};
+      Ray b{spawn(pos, geo, d), d, 0.0f, kInfinity};
+      setLod(b, here);
       ++rays;
       const Hit bh = accel.intersect(b, &c);
       if (!bh.valid()) {
@@ -102,6 +114,7 @@ struct Tracer {
       normals(b, bh, geo, nrm);
       pos = b.at(bh.t);
       mesh = bh.mesh;
+      here = here.at(bh.t);
     }
     return L;
   }
@@ -200,6 +213,7 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
   aov.allocate(opts.size);
 
   const PinholeCamera cam(scene.camera, opts.size);
+  const RayCone camCone{0.0f, cam.pixelSpread()};
   Tracer tracer{scene, accel, opts, opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene), {}};
   if (opts.normals == ShadingNormals::Smooth)
     for (const SceneMesh& sm : scene.meshes) {
@@ -226,7 +240,8 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
           Rng rng(opts.seed * 0x9E3779B97F4A7C15ULL + px, uint64_t(s));
           // Sample 0 goes through the pixel centre (AOVs); the others are jittered.
           const float jx = s == 0 ? 0.5f : rng.uniform(), jy = s == 0 ? 0.5f : rng.uniform();
-          const Ray r = cam.generate(x + jx, y + jy);
+          Ray r = cam.generate(x + jx, y + jy);
+          tracer.setLod(r, camCone);
           RayCounters camera;
           const Hit h = accel.intersect(r, &camera);
           primary += camera;
@@ -237,7 +252,7 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
             tracer.normals(r, h, ng, aov.normal[px]);
           }
           localHits += h.valid();
-          sum += tracer.shade(r, h, rng, tileCounters, localRays);
+          sum += tracer.shade(r, h, camCone, rng, tileCounters, localRays);
         }
         aov.color.at(x, y) = sum / float(opts.spp);
         const float inv = 1.0f / float(opts.spp);

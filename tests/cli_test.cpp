@@ -341,3 +341,21 @@ TEST_CASE("oblong render and info at a fixed level of detail", "[cli][lod]") {
   std::ifstream g(stats);
   CHECK(nlohmann::json::parse(g).at("config").at("lod") == "off");
 }
+
+TEST_CASE("oblong render and info with a level of detail per ray", "[cli][lod]") {
+  auto has = [](const std::string& out, const std::string& s) { return out.find(s) != std::string::npos; };
+  const auto dir = oblong::test::scratchDir("cli_lod_cone");
+  const std::string png = (dir / "cone.png").string(), stats = (dir / "stats.json").string();
+  const Run i = run("info --lod cone");
+  INFO(i.out << i.err);
+  REQUIRE(i.status == 0);
+  CHECK(has(i.out, "LoD      : cone (a λ per ray, bias 0): levels 0 .. 7 built"));
+  const Run r = run("render --size 32x24 --threads 2 --lod cone --lod-bias 1.5 --integrator path --spp 2 -o " + png +
+                    " --stats " + stats);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  std::ifstream f(stats);
+  const auto j = nlohmann::json::parse(f);
+  CHECK(j.at("config").at("lod").at("requested") == "cone");
+  CHECK(j.at("config").at("lod").at("bias") == 1.5);
+}

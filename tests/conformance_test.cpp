@@ -13,6 +13,7 @@
 //
 // The default counts keep the suite fast (it also runs under ASan); the hidden tag
 // [.large] runs 50x more rays per family.
+#include "core/lod.h"
 #include "core/procedural.h"
 #include "core/scene.h"
 #include "render/embree_scene.h"
@@ -344,6 +345,98 @@ void runLodConformance(int rays) {
   }
 }
 }  // namespace
+
+namespace {
+// A level of detail per ray: every combination built once with lodPerRay, each ray at
+// its own λ (drawn per ray from a list, past the last level too, and rays without one),
+// against the brute force of the whole scene moved to that ray's λ (one build per λ).
+void runPerRayLod(Scene s, int count) {
+  const float K = float(lodLevels(*s.meshes[0].displacement->map));
+  const std::vector<float> lambdas{-1.0f, 0.0f, 0.25f, 0.5f, 1.0f, 1.75f, 2.25f, K - 0.5f, K, K + 0.5f};
+  const EmbreeScene tess(s, AccelOptions{.tessellate = true, .traversal = {}});
+  auto families = rayFamilies(s, tess, count, 777);
+  std::mt19937 rng(11);
+  std::vector<std::vector<size_t>> which(families.size());
+  for (size_t k = 0; k < families.size(); ++k)
+    for (Ray& r : families[k].rays) {
+      const size_t l = std::uniform_int_distribution<size_t>(0, lambdas.size() - 1)(rng);
+      r.lod = lambdas[l];
+      which[k].push_back(l);
+    }
+  // The oracle at each λ: the whole scene at that λ, rays without their per-ray λ.
+  std::vector<std::vector<Hit>> ref(families.size());
+  for (size_t k = 0; k < families.size(); ++k) ref[k].resize(families[k].rays.size());
+  for (size_t l = 0; l < lambdas.size(); ++l) {
+    Scene at = s;
+    setLod(at, std::max(lambdas[l], 0.0f), "test");
+    AccelOptions bf;
+    bf.traversal.baseline = "bruteforce";
+    const EmbreeScene brute(at, bf);
+    for (size_t k = 0; k < families.size(); ++k)
+      for (size_t i = 0; i < families[k].rays.size(); ++i)
+        if (which[k][i] == l) {
+          Ray r = families[k].rays[i];
+          r.lod = -1.0f;
+          ref[k][i] = brute.intersect(r);
+        }
+  }
+  // The test can tell: most hits at a ray's λ differ from that ray's hit at level 0.
+  {
+    AccelOptions bf;
+    bf.traversal.baseline = "bruteforce";
+    const EmbreeScene level0(s, bf);
+    size_t hits = 0, moved = 0;
+    for (size_t k = 0; k < families.size(); ++k)
+      for (size_t i = 0; i < families[k].rays.size(); ++i) {
+        if (!ref[k][i].valid() || lambdas[which[k][i]] <= 0.0f) continue;
+        Ray r = families[k].rays[i];
+        r.lod = -1.0f;
+        const Hit h = level0.intersect(r);
+        ++hits, moved += !h.valid() || h.t != ref[k][i].t;
+      }
+    INFO(s.path << ": " << moved << " of " << hits << " hits at lambda > 0 differ from level 0's");
+    CHECK(moved * 10 >= hits * 8);
+  }
+  const float diag = glm::length(sceneBounds(s).extent());
+  setLodCone(s);
+  auto configs = test::conformanceConfigs();
+  TraversalConfig bfCone;
+  bfCone.baseline = "bruteforce";
+  configs.push_back({bfCone, false});
+  for (auto [cfg, slow] : configs) {
+    // Baselines with one surface for every ray refuse a per-ray λ (tested in bad_input).
+    if (!cfg.baseline.empty() && !BaselineRegistry::instance().traits(cfg.baseline).perRayLod) continue;
+    cfg.lodPerRay = true;
+    const EmbreeScene test(s, AccelOptions{.tessellate = false, .traversal = cfg});
+    for (size_t k = 0; k < families.size(); ++k) {
+      std::vector<Ray> rays;
+      std::vector<Hit> expect;
+      for (size_t i = 0; i < families[k].rays.size(); i += slow ? test::kSlowStride : 1)
+        rays.push_back(families[k].rays[i]), expect.push_back(ref[k][i]);
+      const std::vector<Hit> got = traceAll(test, rays);
+      size_t identical = 0;
+      for (size_t i = 0; i < rays.size(); ++i)
+        identical += got[i].valid() == expect[i].valid() && (!got[i].valid() || (got[i].t == expect[i].t && got[i].uv == expect[i].uv));
+      INFO(s.path << " with a lambda per ray: " << label(cfg) << ", " << families[k].name << " (" << rays.size()
+                   << " rays, " << identical << " bit-identical to the whole scene at their lambda)");
+      const Mismatch m = compare(expect, got, rays, diag);
+      INFO("vs bruteforce at each ray's lambda: " << m.first);
+      CHECK(m.count == 0);
+      // Same micro-triangles, same watertight test: bit for bit but for ties on shared
+      // edges (none seen: 2026-12-02, every combination, both scenes).
+      CHECK(identical * 100 >= rays.size() * 99);
+    }
+  }
+}
+}  // namespace
+
+TEST_CASE("lod: every combination with a lambda per ray agrees with the oracle at each ray's lambda", "[conformance][lod]") {
+  Scene quad = tiledQuadScene();
+  quad.meshes[0].displacement->map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 3));  // 4 levels
+  quad.path = "<tiled quad>";
+  runPerRayLod(quad, 40);
+  runPerRayLod(loadScene(kSphere), 30);
+}
 
 TEST_CASE("lod: every combination agrees with the oracles at fractional levels of detail", "[conformance][lod]") {
   runLodConformance(40);

@@ -148,3 +148,44 @@ TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot 
     }
   }
 }
+
+TEST_CASE("lod: a closed displaced torus with a lambda per ray leaks no ray shot from inside", "[lod][watertight]") {
+  Scene s;
+  SceneMesh torus;
+  torus.mesh = torusMesh(1.0f, 0.4f, 24, 12);
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 9));
+  torus.displacement = Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)};
+  s.meshes.push_back(std::move(torus));
+  setLodCone(s);
+  AccelOptions canonical, brute;
+  canonical.traversal.lodPerRay = brute.traversal.lodPerRay = true;
+  brute.traversal.baseline = "bruteforce";
+  for (const AccelOptions& opts : {canonical, brute}) {
+    EmbreeScene accel(s, opts);
+    INFO(accel.geometryName());
+    const int n = 4000, leaks = test::torusLeaks(accel, n, 5, 4.5f);  // past the last level (4)
+    INFO(leaks << " of " << n << " rays leaked");
+    CHECK(leaks == 0);
+  }
+}
+
+TEST_CASE("lod: the per-ray blend reads the heights of the whole-scene surface at that lambda", "[lod]") {
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 4));
+  const Displacement d0{map, 0.2f, -0.5f, vec2(2.0f, 1.0f)};
+  const auto levels = lodPyramid(map);
+  REQUIRE(levels.size() == size_t(lodLevels(*map)) + 1);
+  for (const float lambda : {0.0f, 0.3f, 1.0f, 1.5f, 2.75f, 3.0f, 3.9f, 4.0f}) {
+    const Displacement whole = atLod(d0, lambda);
+    const int k = int(std::floor(lambda));
+    const Displacement band = lodBand(d0, levels, k);
+    const float f = band.blendOf(lambda);
+    INFO("lambda " << lambda);
+    CHECK(band.sampleOffset == whole.sampleOffset);
+    REQUIRE(band.map->width() == whole.map->width());
+    bool same = true;
+    for (int j = -1; j <= band.map->height(); ++j)
+      for (int i = -1; i <= band.map->width(); ++i) same = same && band.raw(i, j, f) == whole.map->at(i, j);
+    CHECK(same);
+    CHECK(band.blendOf(-1.0f) == 0.0f);  // a ray without a level of detail: level k's own heights
+  }
+}

@@ -207,7 +207,7 @@ std::string describe(const TraversalConfig& c) {
                      c.rangeParams.empty() ? "" : c.rangeParams.dump());
 }
 
-int torusLeaks(const EmbreeScene& accel, int n, unsigned seed) {
+int torusLeaks(const EmbreeScene& accel, int n, unsigned seed, float maxLod) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
   int leaks = 0;
@@ -216,6 +216,7 @@ int torusLeaks(const EmbreeScene& accel, int n, unsigned seed) {
     const float z = 2 * U(rng) - 1, phi = 2.0f * std::numbers::pi_v<float> * U(rng);
     const float rr = std::sqrt(std::max(0.0f, 1 - z * z));
     Ray r{vec3(std::cos(a), 0.0f, std::sin(a)), vec3(rr * std::cos(phi), rr * std::sin(phi), z), 0.0f, kInfinity};
+    if (maxLod >= 0.0f) r.lod = maxLod * U(rng);
     if (!accel.intersect(r).valid()) ++leaks;
   }
   return leaks;

@@ -76,6 +76,8 @@ std::string describe(const TraversalConfig& c);
 // Watertightness: n rays from random points of the centre circle (radius 1, in the xz
 // plane) of a closed displaced torus whose shell stays inside its tube, in random
 // directions; returns how many found no hit (a leak).
-int torusLeaks(const EmbreeScene& accel, int n, unsigned seed = 3);
+// Rays from inside a closed torus that escape; with maxLod >= 0 each ray carries its
+// own level of detail, uniform in [0, maxLod] (a per-ray LoD scene).
+int torusLeaks(const EmbreeScene& accel, int n, unsigned seed = 3, float maxLod = -1.0f);
 
 }  // namespace oblong::test

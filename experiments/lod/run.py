@@ -11,7 +11,11 @@ supersampled, filtered truth a pixel should show: mean and max per-pixel error (
 over RGB of |Δ|). Exactness: `oblong trace --lod λ` of a grid of camera rays with the
 canonical configuration and with `--baseline bruteforce` at the same λ (λ > 0: level 0
 is the conformance suites' job, and its brute force is the slow one); a mismatch
-(hit/miss, or |Δt| > 1e-5·max(|t|, 1e-3)) fails the experiment.
+(hit/miss, or |Δt| > 1e-5·max(|t|, 1e-3)) fails the experiment. The per-ray rule
+(`--lod cone --lod-bias b`, docs/lod.md) is rendered the same way and placed on the
+error-against-time plot; its exactness is checked on primary renders (the pixel is the hit
+micro-triangle's normal) against `--baseline bruteforce --lod cone` at the same per-ray λ:
+any differing pixel fails the experiment.
 
     /usr/bin/python3 experiments/lod/run.py [--quick] [--build DIR] [--out DIR] [--reps N]
 """
@@ -46,6 +50,7 @@ def run(ctx):
 
     scenes = ctx.pick(["paper/terracotta_roof", "paper/diving_helmet"], ["sphere"])
     lods = ctx.pick([0, 0.5, 1, 1.5, 2, 3, 4, 5, 6], [0, 1.5, 3])
+    biases = ctx.pick([-1, 0, 1, 2], [0])  # --lod cone: a λ per ray from its ray cone, plus a bias
     size = ctx.pick((320, 240), (48, 36))
     small = ctx.pick((80, 60), (16, 12))  # the same view with 16x the texels per pixel
     check = ctx.pick((96, 72), (24, 18))
@@ -85,6 +90,28 @@ def run(ctx):
                 jobs.append((f"{s}/{lam:g}/{integ}", "render", C.scene_path(s),
                              ["--lod", lam, "--integrator", integ, "--size", wh,
                               "-o", ctx.tmp(f"{C.short(s)}_{lam:g}_{integ}.pfm")]))
+        # A λ per ray (--lod cone): `trace` takes rays without cones, so exactness is checked on
+        # renders: the primary image's pixel is the hit micro-triangle's normal, and every pixel
+        # of the canonical render must equal the brute force's at the same per-ray λ.
+        for b in biases:
+            imgs = {}
+            for k, flags in (("canonical", []), ("bruteforce", ["--baseline", "bruteforce"])):
+                out = ctx.tmp(f"{C.short(s)}_cone{b:g}_{k}_check.pfm")
+                C.run_oblong(ctx, "render", C.scene_path(s), flags + ["--lod", "cone", "--lod-bias", b, "--integrator",
+                                                                      "primary", "--size", f"{check[0]}x{check[1]}",
+                                                                      "-o", out], label=f"{s}/cone/{k}", threads=2)
+                imgs[k] = read_pfm(out)
+            diff = int((np.abs(imgs["canonical"] - imgs["bruteforce"]).max(axis=2) > 0).sum())
+            exact[f"cone{b:g}"] = {"rays": check[0] * check[1], "mismatches": diff}
+            if diff:
+                failures.append(f"{s} with --lod cone --lod-bias {b:g}: {diff} pixels differ from the oracle's")
+            C.run_oblong(ctx, "render", C.scene_path(s), ["--lod", "cone", "--lod-bias", b, "--integrator", "primary",
+                                                          "--size", swh, "-o", ctx.tmp(f"{C.short(s)}_cone{b:g}_small.pfm")],
+                         label=f"{s}/small", threads=2)
+            for integ in ("primary", "path"):
+                jobs.append((f"{s}/cone{b:g}/{integ}", "render", C.scene_path(s),
+                             ["--lod", "cone", "--lod-bias", b, "--integrator", integ, "--size", wh,
+                              "-o", ctx.tmp(f"{C.short(s)}_cone{b:g}_{integ}.pfm")]))
         setup[s] = {"ref": read_pfm(ref_path), "ref_small": read_pfm(ctx.tmp(f"{C.short(s)}_ref_small.pfm")),
                     "ref_s": ref.seconds, "exact": exact, "map": C.map_size(doc)}
         ctx.log(f"{s}: reference {wh} at {ref_spp} spp in {ref.seconds:.1f} s (2 threads); oracle check "
@@ -96,16 +123,21 @@ def run(ctx):
     rows = []
     for s in scenes:
         su = setup[s]
-        for lam in lods:
-            p, q = res[f"{s}/{lam:g}/primary"], res[f"{s}/{lam:g}/path"]
-            img = read_pfm(ctx.tmp(f"{C.short(s)}_{lam:g}_primary.pfm"))  # deterministic (same seed every round)
+        for lam in list(lods) + [f"cone{b:g}" for b in biases]:
+            cone = isinstance(lam, str)
+            key = lam if cone else f"{lam:g}"
+            p, q = res[f"{s}/{key}/primary"], res[f"{s}/{key}/path"]
+            img = read_pfm(ctx.tmp(f"{C.short(s)}_{key}_primary.pfm"))  # deterministic (same seed every round)
             err = np.abs(img - su["ref"]).mean(axis=2)
-            err_small = np.abs(read_pfm(ctx.tmp(f"{C.short(s)}_{lam:g}_small.pfm")) - su["ref_small"]).mean(axis=2)
+            err_small = np.abs(read_pfm(ctx.tmp(f"{C.short(s)}_{key}_small.pfm")) - su["ref_small"]).mean(axis=2)
             st, sq = p[0].stats, q[0].stats
             lod_used = st["config"]["lod"]
-            per = [x for x in lod_used["per_mesh"] if x is not None] if isinstance(lod_used, dict) else [0.0]
+            per = [x for x in lod_used["per_mesh"] if x is not None] if isinstance(lod_used, dict) and \
+                "per_mesh" in lod_used else [0.0]
             e = su["exact"][lam]
-            rows.append({"scene": s, "lod": lam, "lod_traced": max(per) if per else 0.0,
+            rows.append({"scene": s, "lod": lam, "rule": "cone" if cone else "fixed",
+                         "bias": float(lam[4:]) if cone else None,
+                         "lod_traced": None if cone else (max(per) if per else 0.0),
                          "primary_s_median": C.med([r.seconds for r in p]), "primary_s_min": min(r.seconds for r in p),
                          "primary_s_max": max(r.seconds for r in p),
                          "path_s_median": C.med([r.seconds for r in q]), "path_s_min": min(r.seconds for r in q),
@@ -116,15 +148,23 @@ def run(ctx):
                          "peak_bytes": int(st.get("peak_memory", 0)),
                          "error_mean": float(err.mean()), "error_max": float(err.max()),
                          "error_mean_small": float(err_small.mean()), "error_max_small": float(err_small.max()),
-                         "oracle_rays": e["rays"], "oracle_hits": e["oracle_hits"], "mismatches": e["mismatches"],
+                         "oracle_rays": e["rays"], "oracle_hits": e.get("oracle_hits", ""), "mismatches": e["mismatches"],
                          "rounds": len(p)})
     C.write_csv(ctx.out / "results.csv", rows)
 
     plt = C.plt()
     fig, axes = plt.subplots(1, 4, figsize=(20, 4.4))
     for s in scenes:
-        pts = [r for r in rows if r["scene"] == s]
+        pts = [r for r in rows if r["scene"] == s and r["rule"] == "fixed"]
+        cones = [r for r in rows if r["scene"] == s and r["rule"] == "cone"]
         t0 = pts[0]["primary_s_median"]
+        axes[0].plot([r["primary_s_median"] / t0 for r in cones], [r["error_mean"] for r in cones], "*",
+                     markersize=10, label=f"{C.short(s)}: cone (labels: bias)")
+        for r in cones:
+            axes[0].annotate(f"b{r['bias']:g}", (r["primary_s_median"] / t0, r["error_mean"]), fontsize=7,
+                             xytext=(3, -9), textcoords="offset points")
+        for r in cones:
+            axes[3].axhline(r["error_mean"], linestyle=":", linewidth=0.8, alpha=0.6)
         axes[0].plot([r["primary_s_median"] / t0 for r in pts], [r["error_mean"] for r in pts], "o-",
                      label=f"{C.short(s)}: mean")
         axes[0].plot([r["primary_s_median"] / t0 for r in pts], [r["error_max"] for r in pts], "x--",
@@ -148,7 +188,7 @@ def run(ctx):
     axes[0].set_xlabel("primary render time / time at λ = 0 (1 thread, median)")
     axes[0].set_ylabel(f"per-pixel error vs {ref_spp}-spp λ=0 reference")
     axes[0].set_yscale("log")
-    axes[0].set_title("image error against run time (labels: λ)")
+    axes[0].set_title("image error against run time (labels: λ; stars: --lod cone)")
     axes[1].set_xlabel("λ")
     axes[1].set_ylabel("steps per camera ray; time ratio")
     axes[1].set_yscale("log")
@@ -170,10 +210,15 @@ def run(ctx):
     header = ["scene", "λ", "primary s", "× λ=0", "path s", "× λ=0", "steps/camera ray", "range query",
               "mean error", "max error", f"mean error {swh}", "oracle mismatches"]
     trows = []
+    def lod_label(r):
+        if r["rule"] == "cone":
+            return f"cone, bias {r['bias']:g}"
+        return f"{r['lod']:g}" + ("" if r["lod_traced"] == r["lod"] else f" (→{r['lod_traced']:g})")
+
     for s in scenes:
         pts = [r for r in rows if r["scene"] == s]
         for r in pts:
-            trows.append([C.short(s), f"{r['lod']:g}" + ("" if r["lod_traced"] == r["lod"] else f" (→{r['lod_traced']:g})"),
+            trows.append([C.short(s), lod_label(r),
                           f"{r['primary_s_median']:.3f}", f"{r['primary_s_median'] / pts[0]['primary_s_median']:.2f}",
                           f"{r['path_s_median']:.3f}", f"{r['path_s_median'] / pts[0]['path_s_median']:.2f}",
                           f"{r['steps_per_camera_ray']:.2f}", C.fmt_bytes(r["range_bytes"]),
@@ -181,7 +226,8 @@ def run(ctx):
                           f"{r['mismatches']} / {r['oracle_rays']}" if r["oracle_rays"] else "–"])
     parts = []
     for s in scenes:
-        pts = [r for r in rows if r["scene"] == s]
+        pts = [r for r in rows if r["scene"] == s and r["rule"] == "fixed"]
+        cones = [r for r in rows if r["scene"] == s and r["rule"] == "cone"]
         best = min(pts, key=lambda r: r["error_mean"])
         bsm = min(pts, key=lambda r: r["error_mean_small"])
         last = pts[-1]
@@ -191,11 +237,18 @@ def run(ctx):
                      f"{last['steps_per_camera_ray']:.1f}, path time ×{last['path_s_median'] / pts[0]['path_s_median']:.2f}; "
                      f"at {swh}: lowest mean error at λ={bsm['lod']:g} ({bsm['error_mean_small']:.4f} vs "
                      f"{pts[0]['error_mean_small']:.4f} at λ=0)")
+        for r in cones:
+            parts.append(f"{C.short(s)} --lod cone, bias {r['bias']:g}: mean error {r['error_mean']:.4f} "
+                         f"({r['error_mean_small']:.4f} at {swh}), primary time ×"
+                         f"{r['primary_s_median'] / pts[0]['primary_s_median']:.2f}, path time ×"
+                         f"{r['path_s_median'] / pts[0]['path_s_median']:.2f}, steps/camera ray "
+                         f"{r['steps_per_camera_ray']:.2f}")
     verdict = "; ".join(parts) + "."
     if failures:
         return {"status": "mismatch", "verdict": "exactness at λ FAILED: " + "; ".join(failures),
                 "tables": [C.md_table(header, trows)], "plots": ["lod.png"], "csv": ["results.csv"]}
-    verdict += " Canonical vs brute force at the same λ: 0 mismatches at every λ."
+    verdict += (" Canonical vs brute force at the same λ: 0 mismatches at every λ, and 0 differing pixels under "
+                "--lod cone at every bias.")
     return {"status": "ok", "verdict": verdict, "tables": [C.md_table(header, trows)], "plots": ["lod.png"],
             "csv": ["results.csv"]}
 

@@ -4,6 +4,7 @@
 #include "render/traversal/traversal.h"
 
 #include "core/error.h"
+#include "core/lod.h"
 #include "core/scene.h"
 
 #include <fmt/format.h>
@@ -32,7 +33,12 @@ SampleRange samplesOf(const DisplacedTriangle& T, const Displacement& d) {
           int(std::clamp(std::ceil(b.x + eps), -lim, lim)), int(std::clamp(std::ceil(b.y + eps), -lim, lim))};
 }
 Interval exactHeights(const DisplacedTriangle& T, const Displacement& d) {
-  return d.toHeight(bruteForceRange(*d.map, samplesOf(T, d)));
+  const Interval h = d.toHeight(bruteForceRange(*d.map, samplesOf(T, d)));
+  if (!d.next) return h;
+  // Blended per ray toward level k + 1 (docs/lod.md): its samples under T bound the rest.
+  const Displacement n = lodNextLevel(d);
+  const Interval g = n.toHeight(bruteForceRange(*n.map, samplesOf(T, n)));
+  return {std::min(h.lo, g.lo), std::max(h.hi, g.hi)};
 }
 
 // Do the inclusive index ranges [a0,a1] and [c0,c1] meet modulo n?
@@ -58,7 +64,7 @@ class BruteForce final : public Intersector {
     if (!mesh_.params[prim].valid) return false;
     const DisplacedTriangle& T = mesh_.tris[prim];
     const CellRange& cr = mesh_.cells[prim];
-    const MicroCells mc(T, mesh_.disp);
+    const MicroCells mc(T, mesh_.disp, mesh_.disp.blendOf(r.lod));
     const WatertightRay wr(r);
     ClosestHit best;
     MicroTriangle buf[MicroCells::kMaxPerCell];
@@ -230,7 +236,8 @@ std::unique_ptr<Intersector> makeFixedStep(ParamSet& params, const BaselineConte
 }  // namespace
 
 OBLONG_REGISTER_BASELINE("bruteforce", makeBruteForce,
-                         StrategyTraits{.summary = "every micro-triangle of the triangle, no pruning: the oracle"});
+                         StrategyTraits{.summary = "every micro-triangle of the triangle, no pruning: the oracle",
+                                        .perRayLod = true});
 OBLONG_REGISTER_BASELINE("fixedstep", makeFixedStep,
                          StrategyTraits{.summary = "PDM-style constant-step marching with secant refinement "
                                                    "(Hoetzlein 2025, Sec. 4.2; approximate)",

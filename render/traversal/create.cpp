@@ -30,6 +30,7 @@ void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what) {
 std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::vector<DisplacedTriangle> triangles,
                                                const Displacement& disp) {
   if (!disp.map) throw Error("traversal: a displaced mesh needs a displacement map");
+  if (cfg.lodPerRay) return createPerRayLod(cfg, std::move(triangles), disp);
   if (!cfg.baseline.empty()) {
     const BaselineRegistry& reg = BaselineRegistry::instance();
     if (!reg.has(cfg.baseline))
@@ -38,17 +39,30 @@ std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::
     ParamSet bps(cfg.baselineParams, cfg.where("strategies.baseline"));
     return reg.create(cfg.baseline, bps, BaselineContext{cfg, &triangles, disp});
   }
+  checkMarchingScale(cfg);
+  // Invariant 4: the range query is built for what these triangles can ask.
+  ParamSet rps(cfg.rangeParams, cfg.where("strategies.range"));
+  auto rq = createRangeQuery(cfg.range, rps, RangeQueryContext{disp, QueryNeeds::forRects(disp, uvBoxes(triangles))});
+  return assembleTraversal(cfg, std::move(triangles), disp, std::move(rq), rps.resolved());
+}
+
+void checkMarchingScale(const TraversalConfig& cfg) {
   if (!(cfg.marchingScale >= kMinMarchingScale) || !std::isfinite(cfg.marchingScale))
     fail("traversal", "marching scale must be a finite number of texels >= {} (smaller only multiplies the work), got {}",
          kMinMarchingScale, cfg.marchingScale);
+}
 
-  // Invariant 4: the range query is built for what these triangles can ask.
+std::vector<Rect> uvBoxes(const std::vector<DisplacedTriangle>& triangles) {
   std::vector<Rect> boxes;
   boxes.reserve(triangles.size());
   for (const DisplacedTriangle& T : triangles)
     if (T.uvArea2 != 0.0f) boxes.push_back(T.uvBox);
-  ParamSet rps(cfg.rangeParams, cfg.where("strategies.range"));
-  auto rq = createRangeQuery(cfg.range, rps, RangeQueryContext{disp, QueryNeeds::forRects(disp, boxes)});
+  return boxes;
+}
+
+std::unique_ptr<Intersector> assembleTraversal(const TraversalConfig& cfg, std::vector<DisplacedTriangle> triangles,
+                                               const Displacement& disp, std::unique_ptr<RangeQuery> rq,
+                                               nlohmann::json rangeParams) {
   ParamSet ips(cfg.inverterParams, cfg.where("strategies.inverter"));
   auto inv = createInverter(cfg.inverter, ips);
   ParamSet sps(cfg.splitterParams, cfg.where("strategies.splitter"));
@@ -62,7 +76,7 @@ std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::
   parts.rq = std::move(rq);
   parts.inv = std::move(inv);
   parts.split = std::move(split);
-  parts.rangeParams = rps.resolved();
+  parts.rangeParams = std::move(rangeParams);
   parts.inverterParams = ips.resolved();
   parts.splitterParams = sps.resolved();
   parts.opt = TraversalOptions{cfg.marchingScale, cfg.inversionInTraversal};

@@ -115,6 +115,7 @@ class RayPatch final : public SplitContext {
         ray_(ray),
         counters_(counters),
         frame_(mesh.frames[prim]),
+        blend_(mesh.disp.blendOf(ray.lod)),
         watertightRay_(ray),
         origin_(ray.o),
         dir_(ray.d) {
@@ -338,7 +339,7 @@ class RayPatch final : public SplitContext {
       cacheReady_ = true;
     }
     if (!cellsReady_) {  // built at the first cell: most prisms entered march no cell
-      new (&mcRaw_) MicroCells(tri_, disp_);
+      new (&mcRaw_) MicroCells(tri_, disp_, blend_);
       cellsReady_ = true;
     }
     const int n = cells().cell(i + frame_.origin.x, j + frame_.origin.y, buf, cache());
@@ -501,6 +502,7 @@ class RayPatch final : public SplitContext {
   const Ray& ray_;
   RayCounters& counters_;
   const LocalFrame& frame_;  // P, N, barycentrics over local sample coordinates
+  const float blend_;        // the ray's level-of-detail blend (Displacement::blendOf)
   const WatertightRay watertightRay_;
   // The ray in double, and what it needs per triangle.
   const dvec3 origin_, dir_;

@@ -103,6 +103,19 @@ class Traversal final : public TraversalIntersectorBase {
 // The generic path: Traversal<RangeQuery, Inverter, Splitter> (traversal.cpp).
 std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p);
 
+// The steps of createIntersector (create.cpp), shared with the per-ray level of detail
+// (lod_per_ray.cpp): the marching-scale check, the triangles' uv boxes (what the range
+// query is built for), and the traversal over a built range query.
+void checkMarchingScale(const TraversalConfig& cfg);
+std::vector<Rect> uvBoxes(const std::vector<DisplacedTriangle>& triangles);
+std::unique_ptr<Intersector> assembleTraversal(const TraversalConfig& cfg, std::vector<DisplacedTriangle> triangles,
+                                               const Displacement& disp, std::unique_ptr<RangeQuery> rq,
+                                               nlohmann::json rangeParams);
+// One intersector per level of the map, each on level k's grid blending toward level
+// k + 1 with the ray's fraction; a ray at λ goes to level ⌊λ⌋ (docs/lod.md).
+std::unique_ptr<Intersector> createPerRayLod(const TraversalConfig& cfg, std::vector<DisplacedTriangle> triangles,
+                                             const Displacement& disp);
+
 // Opt-in static instantiations. The generic path is the default: instantiations on the
 // concrete strategy types measured no faster (0.2-0.3% fewer instructions, the same
 // speed within noise; docs/traversal.md, "Generic path"), so none is registered. One that a benchmark shows to be faster is one line in a .cpp

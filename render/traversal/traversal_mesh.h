@@ -187,6 +187,15 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
     for (int j = rows.begin(); j != rows.end(); ++j) rowDeltaOf(j, 0, deltaBlocks);
   });
   cellDelta = rowDelta.empty() ? 0.0f : *std::max_element(rowDelta.begin(), rowDelta.end());
+  if (d.next) {
+    // Per-ray blend toward level k + 1 (docs/lod.md): a blended cell's heights are convex
+    // combinations of level k's and of level k + 1's micro-geometry at level k's points,
+    // which varies within a level-k cell by at most level k + 1's cell delta; a few ulps
+    // more for the blend's rounding.
+    const Interval a = d.map->range(), b = d.next->range();
+    const float mag = std::max({std::abs(a.lo), std::abs(a.hi), std::abs(b.lo), std::abs(b.hi)});
+    cellDelta = std::max(cellDelta, maxCellDelta(*d.next)) + 8.0f * std::numeric_limits<float>::epsilon() * mag;
+  }
   params.resize(tris.size());
   cells.resize(tris.size());
   frames.resize(tris.size());

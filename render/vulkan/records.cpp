@@ -21,9 +21,6 @@ using namespace vkgpu;
 static_assert(sizeof(RayGpu) == 32 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1192 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
 static_assert(sizeof(MeshGpu) == 120 && sizeof(PushGpu) == 16);
-static_assert(sizeof(Ray) == 32 && offsetof(Ray, d) == offsetof(RayGpu, d) && offsetof(Ray, tmin) == offsetof(RayGpu, tmin) &&
-                  offsetof(Ray, tmax) == offsetof(RayGpu, tmax),
-              "RayGpu mirrors oblong::Ray: ray buffers are copied as is");
 
 namespace {
 

@@ -48,7 +48,7 @@ using uint = uint32_t;
 // The traversal's constants (stack size, slacks, Newton's tolerance, ...) are in
 // render/traversal/constants.h, shared with the CPU traversal and inversion/newton.h.
 
-// One ray, laid out as the CPU's Ray (o, d, tmin, tmax): ray buffers are copied as is.
+// One ray: the CPU's Ray without its level of detail (VulkanScene::trace converts).
 struct RayGpu {
   vec3 o;
   vec3 d;
