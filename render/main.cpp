@@ -588,6 +588,10 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
       for (const PrismParams& pp : t->mesh().params) prisms += pp.valid, wellPosed += pp.valid && pp.wellPosed;
       fmt::print("    prisms   : {} built ({} well-posed, {} box-only), {} skipped (not displaceable)\n", prisms,
                  wellPosed, prisms - wellPosed, tris.size() - prisms);
+    } else if (is->describe().contains("lod")) {
+      const nlohmann::json j = is->describe();
+      fmt::print("    per ray  : '{}' on each of {} levels: a range structure per level, prisms per level\n",
+                 j.at("name").get<std::string>(), j.at("lod").at("levels").get<int>());
     } else {
       fmt::print("    baseline '{}': no range query\n", is->name());
     }

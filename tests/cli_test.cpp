@@ -350,6 +350,7 @@ TEST_CASE("oblong render and info with a level of detail per ray", "[cli][lod]")
   INFO(i.out << i.err);
   REQUIRE(i.status == 0);
   CHECK(has(i.out, "LoD      : cone (a λ per ray, bias 0): levels 0 .. 7 built"));
+  CHECK(has(i.out, "per ray  : 'rmip+newton+midpoint2d' on each of 8 levels"));
   const Run r = run("render --size 32x24 --threads 2 --lod cone --lod-bias 1.5 --integrator path --spp 2 -o " + png +
                     " --stats " + stats);
   INFO(r.out << r.err);
