@@ -528,11 +528,11 @@ float EmbreeScene::coneLod(const Ray& r, const RayCone& c, float bias) const {
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(lodBase_, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0.0f;
+  // The cone's width across the ray (the footprint's minor axis): no 1/cos for the
+  // elongation along the surface, which over-blurs grazing views (docs/lod.md, measured).
   const float texel = lodTexel_[rh.hit.geomID][rh.hit.primID];
-  const vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
-  const float cosine = std::abs(glm::dot(ng, r.d)) / (glm::length(ng) * glm::length(r.d));
-  const float width = c.at(rh.ray.tfar).width;
-  const float l = bias + std::log2(width / (texel * std::max(cosine, 1e-6f)));
+  const float width = c.at(rh.ray.tfar * glm::length(r.d)).width;  // t in units of |d|
+  const float l = bias + std::log2(width / texel);
   return l > 0.0f ? std::min(l, 64.0f) : 0.0f;  // NaN (an empty cone on a degenerate triangle): 0
 }
 

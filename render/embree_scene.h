@@ -85,8 +85,7 @@ class EmbreeScene {
   Hit intersect(const Ray& r, RayCounters* counters = nullptr) const;
   // The level of detail of a ray with cone c under --lod cone (docs/lod.md, "A λ per
   // ray"): the cone's width where the ray meets the undisplaced base meshes, over the
-  // base triangle's texel size and the cosine there, log2, plus bias; 0 when the ray
-  // misses them. Meaningful only for a scene built with TraversalConfig::lodPerRay.
+  // base triangle's texel size, log2, plus bias; 0 when the ray misses them. Meaningful only for a scene built with TraversalConfig::lodPerRay.
   float coneLod(const Ray& r, const RayCone& c, float bias) const;
   bool occluded(const Ray& r, RayCounters* counters = nullptr) const;
   bool tessellated() const { return tessellate_; }

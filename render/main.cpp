@@ -367,6 +367,9 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
     j["geometry"] = accel.geometryName();
     j["config"] = configJson(accelOpts);
     j["config"]["lod"] = lodJson(scene);
+    if (scene.lodCone && res.primaryRays > 0)
+      j["lod_per_ray"] = {{"camera_mean", res.cameraLodSum / double(res.primaryRays)},
+                          {"camera_at_0", double(res.cameraLodZero) / double(res.primaryRays)}};
     j["traversal"] = accel.describe();
     j["image"] = {{"width", opts.size.x}, {"height", opts.size.y}, {"file", f.out}};
     j["integrator"] = integratorName(opts.integrator);

@@ -229,7 +229,8 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
   const auto start = std::chrono::steady_clock::now();
   tbb::parallel_for(tbb::blocked_range2d<int>(0, H, 16, 0, W, 16), [&](const auto& tile) {
     if (opts.interrupt && opts.interrupt->load(std::memory_order_relaxed)) return;
-    int64_t localRays = 0, localHits = 0;
+    int64_t localRays = 0, localHits = 0, localLodZero = 0;
+    double localLod = 0;
     RayCounters tileCounters;
     for (int y = tile.rows().begin(); y < tile.rows().end(); ++y) {
       for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
@@ -242,6 +243,7 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
           const float jx = s == 0 ? 0.5f : rng.uniform(), jy = s == 0 ? 0.5f : rng.uniform();
           Ray r = cam.generate(x + jx, y + jy);
           tracer.setLod(r, camCone);
+          localLod += std::max(r.lod, 0.0f), localLodZero += r.lod <= 0.0f;
           RayCounters camera;
           const Hit h = accel.intersect(r, &camera);
           primary += camera;
@@ -266,6 +268,7 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
     {
       std::lock_guard<std::mutex> lock(countersMutex);
       res.counters += tileCounters;
+      res.cameraLodSum += localLod, res.cameraLodZero += localLodZero;
     }
     secondary += localRays;
     hits += localHits;

@@ -85,6 +85,10 @@ struct RenderResult {
   int64_t primaryRays = 0, secondaryRays = 0, hits = 0;
   RayCounters counters;  // traversal work of all rays (camera and secondary)
   int64_t pixelsDone = 0;  // < width x height when interrupted (the rest stays black)
+  // Under --lod cone: the camera rays' λ from the rule (before each map's clamp), summed,
+  // and how many were at 0 (footprint within a texel, or no base mesh met).
+  double cameraLodSum = 0;
+  int64_t cameraLodZero = 0;
   bool partial = false;
 };
 

@@ -359,4 +359,10 @@ TEST_CASE("oblong render and info with a level of detail per ray", "[cli][lod]")
   const auto j = nlohmann::json::parse(f);
   CHECK(j.at("config").at("lod").at("requested") == "cone");
   CHECK(j.at("config").at("lod").at("bias") == 1.5);
+  // The default camera sees about 4 texels per pixel on the torus: λ ≈ 2 + 1.5 where the rays
+  // meet it, 0 where they miss every base mesh (the plain ground is not one).
+  const double mean = j.at("lod_per_ray").at("camera_mean").get<double>();
+  CHECK(mean > 0.5);
+  CHECK(mean < 7.0);
+  CHECK(j.at("lod_per_ray").at("camera_at_0").get<double>() < 1.0);
 }

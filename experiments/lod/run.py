@@ -50,7 +50,7 @@ def run(ctx):
 
     scenes = ctx.pick(["paper/terracotta_roof", "paper/diving_helmet"], ["sphere"])
     lods = ctx.pick([0, 0.5, 1, 1.5, 2, 3, 4, 5, 6], [0, 1.5, 3])
-    biases = ctx.pick([-1, 0, 1, 2], [0])  # --lod cone: a λ per ray from its ray cone, plus a bias
+    biases = ctx.pick([-2, -1, 0, 1], [0])  # --lod cone: a λ per ray from its ray cone, plus a bias
     size = ctx.pick((320, 240), (48, 36))
     small = ctx.pick((80, 60), (16, 12))  # the same view with 16x the texels per pixel
     check = ctx.pick((96, 72), (24, 18))
@@ -138,6 +138,8 @@ def run(ctx):
             rows.append({"scene": s, "lod": lam, "rule": "cone" if cone else "fixed",
                          "bias": float(lam[4:]) if cone else None,
                          "lod_traced": None if cone else (max(per) if per else 0.0),
+                         "lod_camera_mean": st.get("lod_per_ray", {}).get("camera_mean"),
+                         "lod_camera_at_0": st.get("lod_per_ray", {}).get("camera_at_0"),
                          "primary_s_median": C.med([r.seconds for r in p]), "primary_s_min": min(r.seconds for r in p),
                          "primary_s_max": max(r.seconds for r in p),
                          "path_s_median": C.med([r.seconds for r in q]), "path_s_min": min(r.seconds for r in q),
@@ -212,7 +214,7 @@ def run(ctx):
     trows = []
     def lod_label(r):
         if r["rule"] == "cone":
-            return f"cone, bias {r['bias']:g}"
+            return f"cone, bias {r['bias']:g} (camera rays: mean λ {r['lod_camera_mean']:.2f})"
         return f"{r['lod']:g}" + ("" if r["lod_traced"] == r["lod"] else f" (→{r['lod_traced']:g})")
 
     for s in scenes:
@@ -238,7 +240,8 @@ def run(ctx):
                      f"at {swh}: lowest mean error at λ={bsm['lod']:g} ({bsm['error_mean_small']:.4f} vs "
                      f"{pts[0]['error_mean_small']:.4f} at λ=0)")
         for r in cones:
-            parts.append(f"{C.short(s)} --lod cone, bias {r['bias']:g}: mean error {r['error_mean']:.4f} "
+            parts.append(f"{C.short(s)} --lod cone, bias {r['bias']:g} (mean camera λ {r['lod_camera_mean']:.2f}): "
+                         f"mean error {r['error_mean']:.4f} "
                          f"({r['error_mean_small']:.4f} at {swh}), primary time ×"
                          f"{r['primary_s_median'] / pts[0]['primary_s_median']:.2f}, path time ×"
                          f"{r['path_s_median'] / pts[0]['path_s_median']:.2f}, steps/camera ray "
