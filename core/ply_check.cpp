@@ -535,7 +535,9 @@ PlyCheck checkPly(const std::string& path, const Assimp::Importer& importer) {
   in.close();
   // assimp skips leading line breaks before the magic ("\nply" hangs too); be stricter.
   const size_t start = std::min(head.size(), head.find_first_not_of(" \t\r\n\v\f"));
-  const bool plyMagic = head.compare(start, 3, "ply") == 0 || head.compare(start, 3, "PLY") == 0;
+  // assimp takes the magic in any case ("pLy" too: found by the fuzzer, it hung on one).
+  auto lower = [&](size_t i) { return i < head.size() ? char(std::tolower((unsigned char)head[i])) : '\0'; };
+  const bool plyMagic = lower(start) == 'p' && lower(start + 1) == 'l' && lower(start + 2) == 'y';
   const bool asPly = ext == ".ply" || (plyMagic && (ext.empty() || !importer.IsExtensionSupported(ext)));
   if (!asPly || !plyMagic) return {};  // without the magic, assimp's PLY reader stops at once
   // assimp hangs on "end_headerX" or "comment end_header" too: the first word must be it.

@@ -438,6 +438,14 @@ TEST_CASE("lod: every combination with a lambda per ray agrees with the oracle a
   runPerRayLod(loadScene(kSphere), 30);
 }
 
+TEST_CASE("lod (large): every combination with a lambda per ray agrees with the oracle at each ray's lambda", "[conformance][lod][.large]") {
+  Scene quad = tiledQuadScene();
+  quad.meshes[0].displacement->map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 3));
+  quad.path = "<tiled quad>";
+  runPerRayLod(quad, 3000);
+  runPerRayLod(loadScene(kSphere), 3000);
+}
+
 TEST_CASE("lod: every combination agrees with the oracles at fractional levels of detail", "[conformance][lod]") {
   runLodConformance(40);
 }

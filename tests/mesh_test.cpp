@@ -577,6 +577,12 @@ TEST_CASE("PLY headers assimp would misread are refused; its quirks are worked a
                                                       "elent face 1\nproperty list uchar int vertex_indices\n"
                                                       "end_header")),
                     Contains("cannot load mesh (PLY header without an end_header line as assimp reads lines"));
+  // The same with the magic in mixed case, which assimp accepts too (the fuzzer again).
+  CHECK_THROWS_WITH(loadMesh(writeFile("eof_end_case.ply", "pLy\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                                                           "property float x\np0operty float y\nproperty float z\n"
+                                                           "elent face 1\nproperIIIIist uchar int vertex_indices\n"
+                                                           "end_header")),
+                    Contains("cannot load mesh (PLY header without an end_header line as assimp reads lines"));
   // A property type assimp does not know.
   CHECK_THROWS_WITH(loadMesh(writeFile("int64.ply", "ply\nformat ascii 1.0\n" + vertex +
                                                         "property int64 id\n" + face + "end_header\n" + data)),
