@@ -198,6 +198,18 @@ struct Context {
   float lod;
 };
 
+// A ray as Embree takes it, no hit yet.
+RTCRayHit toRayHit(const Ray& r) {
+  RTCRayHit rh{};
+  rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
+  rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
+  rh.ray.tnear = r.tmin;
+  rh.ray.tfar = r.tmax;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
 // A ray in the mesh's frame: the origin minus the frame's, rounded once (exact when the
 // two are within a factor 2^29 of each other; the direction and t are unchanged).
 Ray toFrame(const Ray& r, const dvec3& origin) {
@@ -519,13 +531,7 @@ float EmbreeScene::coneLod(const Ray& r, const RayCone& c, float bias) const {
   if (!lodBase_) return 0.0f;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  RTCRayHit rh{};
-  rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
-  rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
-  rh.ray.tnear = r.tmin;
-  rh.ray.tfar = r.tmax;
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  RTCRayHit rh = toRayHit(r);
   rtcIntersect1(lodBase_, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0.0f;
   // The cone's width across the ray (the footprint's minor axis): no 1/cos for the
@@ -541,13 +547,7 @@ Hit EmbreeScene::intersect(const Ray& r, RayCounters* counters) const {
   rtcInitIntersectContext(&ctx.ctx);
   ctx.counters = counters;
   ctx.lod = r.lod;
-  RTCRayHit rh{};
-  rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
-  rh.ray.dir_x = r.d.x, rh.ray.dir_y = r.d.y, rh.ray.dir_z = r.d.z;
-  rh.ray.tnear = r.tmin;
-  rh.ray.tfar = r.tmax;
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  RTCRayHit rh = toRayHit(r);
   rtcIntersect1(scene_, &ctx.ctx, &rh);
   Hit h;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;

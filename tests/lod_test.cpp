@@ -17,6 +17,17 @@ using namespace oblong;
 
 namespace {
 
+// A closed displaced torus (64x48 map: 4 levels), for rays shot from inside.
+Scene closedTorus() {
+  Scene s;
+  SceneMesh torus;
+  torus.mesh = torusMesh(1.0f, 0.4f, 24, 12);
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 9));
+  torus.displacement = Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)};
+  s.meshes.push_back(std::move(torus));
+  return s;
+}
+
 HeightMap randomMap(int w, int h, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> U(-1.0f, 3.0f);
@@ -129,12 +140,7 @@ TEST_CASE("lod: setLod moves every displaced mesh, shares levels, and off restor
 }
 
 TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot from inside", "[lod][watertight]") {
-  Scene s;
-  SceneMesh torus;
-  torus.mesh = torusMesh(1.0f, 0.4f, 24, 12);
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 9));
-  torus.displacement = Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)};
-  s.meshes.push_back(std::move(torus));
+  Scene s = closedTorus();
   for (const float lod : {0.5f, 1.75f, 3.25f}) {
     setLod(s, lod, "test");
     AccelOptions tessellated{.tessellate = true, .traversal = {}}, canonical, brute;
@@ -150,12 +156,7 @@ TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot 
 }
 
 TEST_CASE("lod: a closed displaced torus with a lambda per ray leaks no ray shot from inside", "[lod][watertight]") {
-  Scene s;
-  SceneMesh torus;
-  torus.mesh = torusMesh(1.0f, 0.4f, 24, 12);
-  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 9));
-  torus.displacement = Displacement{map, 0.15f, -0.5f, vec2(3.0f, 2.0f)};
-  s.meshes.push_back(std::move(torus));
+  Scene s = closedTorus();
   setLodCone(s);
   AccelOptions canonical, brute;
   canonical.traversal.lodPerRay = brute.traversal.lodPerRay = true;
