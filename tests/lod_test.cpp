@@ -190,3 +190,27 @@ TEST_CASE("lod: the per-ray blend reads the heights of the whole-scene surface a
     CHECK(band.blendOf(-1.0f) == 0.0f);  // a ray without a level of detail: level k's own heights
   }
 }
+
+TEST_CASE("lod: a lambda per ray on a map without levels traces level 0", "[lod]") {
+  Scene s = closedTorus();
+  s.meshes[0].displacement->map = std::make_shared<const HeightMap>(proceduralHeightMap(63, 47, 9));  // odd: no level
+  AccelOptions level0, perRay;
+  perRay.traversal.lodPerRay = true;
+  const EmbreeScene a(s, level0), b(s, perRay);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+  int same = 0, hits = 0;
+  const int n = 500;
+  for (int k = 0; k < n; ++k) {
+    Ray r{vec3(1.5f * U(rng), 3.0f, 1.5f * U(rng)), glm::normalize(vec3(0.3f * U(rng), -1.0f, 0.3f * U(rng))), 0.0f,
+          kInfinity};  // down onto the torus (its axis is y)
+    const Hit ha = a.intersect(r);
+    r.lod = 4.0f * (U(rng) + 1.0f);
+    const Hit hb = b.intersect(r);
+    hits += ha.valid();
+    same += ha.valid() == hb.valid() && (!ha.valid() || (ha.t == hb.t && ha.uv == hb.uv));
+  }
+  INFO(same << " of " << n << " rays identical, " << hits << " hits");
+  CHECK(hits > n / 10);
+  CHECK(same == n);
+}
