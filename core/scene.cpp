@@ -466,7 +466,7 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
   if (top.has("strategies")) {
     const Reader st = top.object("strategies");
     st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal", "lod",
-                  "lod_bias", "lod_bounce_spread"});
+                  "lod_bias"});
     parseStrategy(st, "range", s.range);
     parseStrategy(st, "inverter", s.inverter);
     parseStrategy(st, "splitter", s.splitter);
@@ -489,12 +489,6 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
       if (!v.is_number() || !std::isfinite(v.get<double>()) || std::abs(v.get<double>()) > 64.0)
         st.errorAt("lod_bias", "must be a number of levels in [-64, 64], got {}", shown(v));
       s.lodBias = float(v.get<double>());
-    }
-    if (st.has("lod_bounce_spread")) {
-      const json& v = st.at("lod_bounce_spread");
-      if (!v.is_number() || !(v.get<double>() >= 0.0 && v.get<double>() <= 3.2))
-        st.errorAt("lod_bounce_spread", "must be an angle in radians in [0, 3.2], got {}", shown(v));
-      s.lodBounceSpread = float(v.get<double>());
     }
   }
   top.require("meshes");

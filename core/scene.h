@@ -66,9 +66,6 @@ struct Scene {
   // at level 0 and every level built by the intersectors; lodBias is added to each λ.
   bool lodCone = false;
   float lodBias = 0.0f;
-  // Radians added to a ray cone's spread at each diffuse bounce (and ambient-occlusion
-  // ray): the lobe's width, which the flat-mirror cone leaves out (docs/lod.md).
-  float lodBounceSpread = 0.0f;
   ivec2 imageSize{640, 480};
 };
 

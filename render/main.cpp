@@ -113,16 +113,13 @@ struct StrategyFlags {
   std::optional<float> marchingScale, step;
   std::optional<bool> inversionInTraversal;
   std::string lod;  // empty: the scene's
-  std::optional<float> lodBias, lodBounceSpread;
+  std::optional<float> lodBias;
 
   void add(CLI::App* app) {
     app->add_option("--lod", lod,
                     "level of detail: off | cone (a λ per ray from its ray cone; render only) | a number >= 0, "
                     "clamped to each map's last level (docs/lod.md; default: the scene's, off)");
     app->add_option("--lod-bias", lodBias, "levels added to each ray's λ under --lod cone (default: the scene's, 0)");
-    app->add_option("--lod-bounce-spread", lodBounceSpread,
-                    "radians added to a ray cone's spread at each diffuse bounce under --lod cone (default: the "
-                    "scene's, 0)");
     app->add_option("--range", range, "RangeQuery: " + strategyChoices(StrategyKind::Range));
     app->add_option("--inverter", inverter, "Inverter: " + strategyChoices(StrategyKind::Inverter));
     app->add_option("--splitter", splitter, "Splitter: " + strategyChoices(StrategyKind::Splitter));
@@ -160,12 +157,6 @@ struct StrategyFlags {
       if (!std::isfinite(*lodBias) || std::abs(*lodBias) > 64.0f)
         fail("--lod-bias", "must be a number of levels in [-64, 64], got {}", *lodBias);
       scene.lodBias = *lodBias;
-    }
-    if (lodBounceSpread) {
-      if (!scene.lodCone) fail("--lod-bounce-spread", "applies to --lod cone only (a λ per ray)");
-      if (!(*lodBounceSpread >= 0.0f && *lodBounceSpread <= 3.2f))
-        fail("--lod-bounce-spread", "must be an angle in radians in [0, 3.2], got {}", *lodBounceSpread);
-      scene.lodBounceSpread = *lodBounceSpread;
     }
     if (scene.lodCone && !perRay.empty())
       fail(lod == "cone" ? std::string("--lod") : scene.path + ": strategies.lod",
@@ -239,8 +230,7 @@ nlohmann::json configJson(const AccelOptions& o) {
 
 // The scene's level of detail and, per displaced mesh, the λ it is traced at.
 nlohmann::json lodJson(const Scene& scene) {
-  if (scene.lodCone)
-    return {{"requested", "cone"}, {"bias", scene.lodBias}, {"bounce_spread", scene.lodBounceSpread}};
+  if (scene.lodCone) return {{"requested", "cone"}, {"bias", scene.lodBias}};
   if (!scene.lod) return "off";
   nlohmann::json per = nlohmann::json::array();
   for (const SceneMesh& sm : scene.meshes)

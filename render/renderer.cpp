@@ -36,11 +36,6 @@ struct Tracer {
     if (scene.lodCone) r.lod = accel.coneLod(r, c, scene.lodBias);
   }
 
-  RayCone bounce(RayCone c) const {
-    c.spread += scene.lodBounceSpread;
-    return c;
-  }
-
   void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
     shadingNormals(scene, triangles, opts.normals, r, h, ngf, ns);
   }
@@ -74,9 +69,9 @@ struct Tracer {
   }
 
   // Radiance along a camera ray with cone `cone` whose first hit is h. Cones widen
-  // along the path by their spread over each segment; a diffuse bounce adds the scene's
-  // lodBounceSpread (0: the flat-mirror footprint, the finest a bounce can give; the
-  // curvature term of the ray-cone method is not modelled; docs/lod.md).
+  // along the path by their spread over each segment; bounces add no spread (the ray
+  // cones' curvature term is not modelled: the footprint is the flat-mirror one, the
+  // finest a bounce can give; docs/lod.md).
   vec3 shade(const Ray& r, const Hit& h, const RayCone& cone, Rng& rng, RayCounters& c, int64_t& rays) const {
     if (!h.valid()) return opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
     vec3 ng, n;
@@ -88,7 +83,7 @@ struct Tracer {
       if (glm::dot(d, ng) <= 0) return vec3(0.0f);  // below the geometric surface: occluded
       ++rays;
       Ray a{spawn(p, ng, d), d, 0.0f, aoRadius};
-      setLod(a, bounce(cone.at(h.t)));
+      setLod(a, cone.at(h.t));
       return vec3(accel.occluded(a, &c) ? 0.0f : 1.0f);
     }
     // Path tracing: diffuse surfaces, NEE at every vertex, sky on escape.
@@ -109,7 +104,6 @@ struct Tracer {
       const vec3 d = cosineSample(nrm, rng);
       if (glm::dot(d, geo) <= 0) break;  // into the surface (smooth normals only): absorbed
       Ray b{spawn(pos, geo, d), d, 0.0f, kInfinity};
-      here = bounce(here);
       setLod(b, here);
       ++rays;
       const Hit bh = accel.intersect(b, &c);

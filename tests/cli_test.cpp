@@ -351,15 +351,14 @@ TEST_CASE("oblong render and info with a level of detail per ray", "[cli][lod]")
   REQUIRE(i.status == 0);
   CHECK(has(i.out, "LoD      : cone (a λ per ray, bias 0): levels 0 .. 7 built"));
   CHECK(has(i.out, "per ray  : 'rmip+newton+midpoint2d' on each of 8 levels"));
-  const Run r = run("render --size 32x24 --threads 2 --lod cone --lod-bias 1.5 --lod-bounce-spread 0.25 --integrator "
-                    "path --spp 2 -o " + png + " --stats " + stats);
+  const Run r = run("render --size 32x24 --threads 2 --lod cone --lod-bias 1.5 --integrator path --spp 2 -o " + png +
+                    " --stats " + stats);
   INFO(r.out << r.err);
   REQUIRE(r.status == 0);
   std::ifstream f(stats);
   const auto j = nlohmann::json::parse(f);
   CHECK(j.at("config").at("lod").at("requested") == "cone");
   CHECK(j.at("config").at("lod").at("bias") == 1.5);
-  CHECK(j.at("config").at("lod").at("bounce_spread") == 0.25);
   // The default camera sees about 4 texels per pixel on the torus: λ ≈ 2 + 1.5 where the rays
   // meet it, 0 where they miss every base mesh (the plain ground is not one).
   const double mean = j.at("lod_per_ray").at("camera_mean").get<double>();
