@@ -31,7 +31,10 @@ struct Tracer {
   // Smooth normals: every mesh's triangles, prepared once (indexed by Hit::prim).
   std::vector<std::vector<DisplacedTriangle>> triangles;
 
-  // Under --lod cone, a ray's λ from its cone (EmbreeScene::coneLod); otherwise none.
+  // Under --lod cone, a camera ray's λ from its cone (EmbreeScene::coneLod); otherwise
+  // none. Rays leaving a hit (shadow, ambient occlusion, bounces) keep the λ of the ray
+  // that found it: at any other λ the surface they start on is another one, up to the
+  // height range away, and they would hit it at once (docs/lod.md, measured).
   void setLod(Ray& r, const RayCone& c) const {
     if (scene.lodCone) r.lod = accel.coneLod(r, c, scene.lodBias);
   }
@@ -43,7 +46,7 @@ struct Tracer {
 
   // Direct light from every light at p (geometric normal ng and shading normal n facing
   // the incoming ray).
-  vec3 direct(const vec3& p, const vec3& ng, const vec3& n, const vec3& albedo, const RayCone& cone, RayCounters& c,
+  vec3 direct(const vec3& p, const vec3& ng, const vec3& n, const vec3& albedo, float lod, RayCounters& c,
               int64_t& rays) const {
     vec3 L(0.0f);
     for (const Light& light : scene.lights) {
@@ -61,18 +64,15 @@ struct Tracer {
       const float cosTheta = glm::dot(n, wi);
       if (cosTheta <= 0 || glm::dot(ng, wi) <= 0) continue;  // the surface itself shadows p
       ++rays;
-      Ray s{p + spawnEps(p) * ng, wi, 0.0f, dist * (1.0f - 1e-4f)};
-      setLod(s, cone);
+      const Ray s{p + spawnEps(p) * ng, wi, 0.0f, dist * (1.0f - 1e-4f), lod};
       if (!accel.occluded(s, &c)) L += albedo * light.intensity * (cosTheta * falloff / kPi);
     }
     return L;
   }
 
-  // Radiance along a camera ray with cone `cone` whose first hit is h. Cones widen
-  // along the path by their spread over each segment; bounces add no spread (the ray
-  // cones' curvature term is not modelled: the footprint is the flat-mirror one, the
-  // finest a bounce can give; docs/lod.md).
-  vec3 shade(const Ray& r, const Hit& h, const RayCone& cone, Rng& rng, RayCounters& c, int64_t& rays) const {
+  // Radiance along a camera ray whose first hit is h; every ray of the path keeps the
+  // camera ray's level of detail (setLod).
+  vec3 shade(const Ray& r, const Hit& h, Rng& rng, RayCounters& c, int64_t& rays) const {
     if (!h.valid()) return opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
     vec3 ng, n;
     normals(r, h, ng, n);
@@ -82,18 +82,16 @@ struct Tracer {
       const vec3 d = cosineSample(n, rng);
       if (glm::dot(d, ng) <= 0) return vec3(0.0f);  // below the geometric surface: occluded
       ++rays;
-      Ray a{spawn(p, ng, d), d, 0.0f, aoRadius};
-      setLod(a, cone.at(h.t));
+      const Ray a{spawn(p, ng, d), d, 0.0f, aoRadius, r.lod};
       return vec3(accel.occluded(a, &c) ? 0.0f : 1.0f);
     }
     // Path tracing: diffuse surfaces, NEE at every vertex, sky on escape.
     vec3 L(0.0f), beta(1.0f);
     vec3 pos = p, nrm = n, geo = ng;
     int mesh = h.mesh;
-    RayCone here = cone.at(h.t);
     for (int depth = 0;; ++depth) {
       const vec3 albedo = scene.meshes[size_t(mesh)].albedo;
-      L += beta * direct(pos, geo, nrm, albedo, here, c, rays);
+      L += beta * direct(pos, geo, nrm, albedo, r.lod, c, rays);
       if (depth + 1 >= opts.maxDepth) break;
       beta *= albedo;  // cosine-weighted sampling of a Lambertian BRDF
       if (depth >= 3) {
@@ -103,8 +101,7 @@ struct Tracer {
       }
       const vec3 d = cosineSample(nrm, rng);
       if (glm::dot(d, geo) <= 0) break;  // into the surface (smooth normals only): absorbed
-      Ray b{spawn(pos, geo, d), d, 0.0f, kInfinity};
-      setLod(b, here);
+      const Ray b{spawn(pos, geo, d), d, 0.0f, kInfinity, r.lod};
       ++rays;
       const Hit bh = accel.intersect(b, &c);
       if (!bh.valid()) {
@@ -114,7 +111,6 @@ struct Tracer {
       normals(b, bh, geo, nrm);
       pos = b.at(bh.t);
       mesh = bh.mesh;
-      here = here.at(bh.t);
     }
     return L;
   }
@@ -254,7 +250,7 @@ RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOp
             tracer.normals(r, h, ng, aov.normal[px]);
           }
           localHits += h.valid();
-          sum += tracer.shade(r, h, camCone, rng, tileCounters, localRays);
+          sum += tracer.shade(r, h, rng, tileCounters, localRays);
         }
         aov.color.at(x, y) = sum / float(opts.spp);
         const float inv = 1.0f / float(opts.spp);
