@@ -1,6 +1,7 @@
 #include "core/error.h"
 #include "core/scene.h"
 #include "core/triangle.h"
+#include "render/embree_scene.h"
 #include "test_util.h"
 
 #include <catch2/catch.hpp>
@@ -159,6 +160,18 @@ TEST_CASE("defaults: a scene with only a mesh", "[scene]") {
   CHECK(t.range.name == "rmip");
   CHECK(t.inverter.name == "newton");
   CHECK(t.splitter.name == "midpoint2d");
+}
+
+TEST_CASE("strategies.lod \"cone\" and lod_bias: a lambda per ray, displacements at level 0", "[scene][lod]") {
+  const fs::path dir = sceneDir();
+  const Scene s = loadScene(writeScene(dir / "cone.json", R"({"meshes": [
+    {"shape": {"type": "plane"}, "displacement": {"map": "map.png"}}],
+    "strategies": {"lod": "cone", "lod_bias": -1.5}})"));
+  CHECK(s.lodCone);
+  CHECK(s.lodBias == -1.5f);
+  CHECK(!s.lod);
+  CHECK(!s.meshes[0].displacement->level0);  // nothing moved: the intersectors build the levels
+  CHECK(traversalConfigOf(s).lodPerRay);
 }
 
 TEST_CASE("procedural shapes stand in for mesh files", "[scene]") {
