@@ -198,7 +198,8 @@ struct Context {
   float lod;
 };
 
-// A ray as Embree takes it, no hit yet.
+}  // namespace
+
 RTCRayHit toRayHit(const Ray& r) {
   RTCRayHit rh{};
   rh.ray.org_x = r.o.x, rh.ray.org_y = r.o.y, rh.ray.org_z = r.o.z;
@@ -209,6 +210,8 @@ RTCRayHit toRayHit(const Ray& r) {
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   return rh;
 }
+
+namespace {
 
 // A ray in the mesh's frame: the origin minus the frame's, rounded once (exact when the
 // two are within a factor 2^29 of each other; the direction and t are unchanged).
@@ -351,10 +354,9 @@ EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
 
 void EmbreeScene::release() {
   if (scene_) rtcReleaseScene(scene_);
-  if (lodBase_) rtcReleaseScene(lodBase_);
+  cone_.reset();
   if (device_) rtcReleaseDevice(device_);
   scene_ = nullptr;
-  lodBase_ = nullptr;
   device_ = nullptr;
 }
 
@@ -369,7 +371,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
   if (opts.tessellate && opts.traversal.lodPerRay)
     fail(scene.path, "the pre-tessellated baseline builds one surface: a level of detail per ray (--lod cone) "
                      "needs the traversal or --baseline bruteforce (or a fixed --lod)");
-  if (opts.traversal.lodPerRay) buildLodBase(scene);
+  if (opts.traversal.lodPerRay) cone_ = std::make_unique<ConeLod>(scene, device_);
   // The pre-tessellation baseline is refused before anything is built when its
   // micro-triangles, their buffers and Embree's BVH would not fit.
   std::vector<std::vector<PatchSize>> sizes(scene.meshes.size());
@@ -492,55 +494,6 @@ EmbreeScene::UpdateTimes EmbreeScene::update(int mesh, const SampleRange& change
 }
 
 EmbreeScene::~EmbreeScene() { release(); }
-
-void EmbreeScene::buildLodBase(const Scene& scene) {
-  lodBase_ = rtcNewScene(device_);
-  for (const SceneMesh& sm : scene.meshes) {
-    if (!sm.displacement) continue;
-    const Mesh& mesh = sm.mesh;
-    const Displacement& d = *sm.displacement;
-    const HeightMap& m = d.level0 ? *d.level0 : *d.map;
-    RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), mesh.positions.size()));
-    for (size_t i = 0; i < mesh.positions.size(); ++i) {
-      const vec3 p(mesh.world(i));
-      v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
-    }
-    auto* idx = static_cast<glm::uvec3*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                 sizeof(glm::uvec3), mesh.triangles.size()));
-    std::vector<float> texel(mesh.triangles.size(), kInfinity);
-    // Texels per uv unit, as Displacement::toSample maps them.
-    const double texelsPerUV = double(m.width()) * d.tiling.x * double(m.height()) * d.tiling.y;
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      idx[t] = mesh.triangles[t];
-      const DisplacedTriangle T = mesh.triangle(t);
-      const double uvArea = 0.5 * std::abs(double(T.uvArea2)) * std::abs(texelsPerUV);
-      if (uvArea > 0 && T.area > 0) texel[t] = float(std::sqrt(double(T.area) / uvArea));
-    }
-    rtcCommitGeometry(geom);
-    const unsigned id = rtcAttachGeometry(lodBase_, geom);
-    rtcReleaseGeometry(geom);
-    if (lodTexel_.size() <= id) lodTexel_.resize(id + 1);
-    lodTexel_[id] = std::move(texel);
-  }
-  rtcCommitScene(lodBase_);
-}
-
-float EmbreeScene::coneLod(const Ray& r, const RayCone& c, float bias) const {
-  if (!lodBase_) return 0.0f;
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  RTCRayHit rh = toRayHit(r);
-  rtcIntersect1(lodBase_, &ctx, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0.0f;
-  // The cone's width across the ray (the footprint's minor axis): no 1/cos for the
-  // elongation along the surface, which over-blurs grazing views (docs/lod.md, measured).
-  const float texel = lodTexel_[rh.hit.geomID][rh.hit.primID];
-  const float width = c.at(rh.ray.tfar * glm::length(r.d)).width;  // t in units of |d|
-  const float l = bias + std::log2(width / texel);
-  return l > 0.0f ? std::min(l, 64.0f) : 0.0f;  // NaN (an empty cone on a degenerate triangle): 0
-}
 
 Hit EmbreeScene::intersect(const Ray& r, RayCounters* counters) const {
   Context ctx;

@@ -8,6 +8,7 @@
 
 #include "core/memory.h"
 #include "core/scene.h"
+#include "render/cone_lod.h"
 #include "render/intersector.h"
 
 #include <embree3/rtcore.h>
@@ -27,13 +28,8 @@ struct Hit {
   bool valid() const { return mesh >= 0; }
 };
 
-// A ray cone (Akenine-Möller et al., "Texture Level of Detail Strategies for Real-Time
-// Ray Tracing", Ray Tracing Gems 2019, ch. 20): the footprint's width at the ray's
-// origin and its spread angle; at distance t it is width + spread·t wide.
-struct RayCone {
-  float width = 0.0f, spread = 0.0f;
-  RayCone at(float t) const { return {width + spread * t, spread}; }
-};
+// A ray as Embree takes it, no hit yet.
+RTCRayHit toRayHit(const Ray& r);
 
 struct AccelOptions {
   bool tessellate = false;    // the pre-tessellation baseline instead of an Intersector
@@ -83,10 +79,9 @@ class EmbreeScene {
 
   // First hit; per-ray traversal work is added to *counters when given.
   Hit intersect(const Ray& r, RayCounters* counters = nullptr) const;
-  // The level of detail of a ray with cone c under --lod cone (docs/lod.md, "A λ per
-  // ray"): the cone's width where the ray meets the undisplaced base meshes, over the
-  // base triangle's texel size, log2, plus bias; 0 when the ray misses them. Meaningful only for a scene built with TraversalConfig::lodPerRay.
-  float coneLod(const Ray& r, const RayCone& c, float bias) const;
+  // The level of detail of a ray with cone c under --lod cone (ConeLod::lod); 0 for a
+  // scene built without TraversalConfig::lodPerRay.
+  float coneLod(const Ray& r, const RayCone& c, float bias) const { return cone_ ? cone_->lod(r, c, bias) : 0.0f; }
   bool occluded(const Ray& r, RayCounters* counters = nullptr) const;
   bool tessellated() const { return tessellate_; }
   std::string geometryName() const;
@@ -126,15 +121,11 @@ class EmbreeScene {
     EmbreeUserGeometry user;  // what its callbacks get
   };
   void build(const Scene& scene, const AccelOptions& opts);
-  void buildLodBase(const Scene& scene);
   void release();
 
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
-  // Under a per-ray level of detail: the displaced meshes' base triangles, and each
-  // one's texel size in world units (indexed by geometry id, then primitive).
-  RTCScene lodBase_ = nullptr;
-  std::vector<std::vector<float>> lodTexel_;
+  std::unique_ptr<ConeLod> cone_;  // under a per-ray level of detail only
   std::vector<std::unique_ptr<Geometry>> geoms_;  // indexed by Embree geometry id
   std::shared_ptr<std::atomic<int64_t>> embreeBytes_;
   size_t microTriangles_ = 0, baseTriangles_ = 0;

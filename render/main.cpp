@@ -137,7 +137,7 @@ struct StrategyFlags {
 
   // --lod moves the scene's displaced meshes to that level of detail (from their
   // full-resolution maps), before anything is built for them.
-  // `perRay`: "" where a λ per ray can be traced (render on the CPU), else why not.
+  // `perRay`: "" where a λ per ray can be traced (render), else why not.
   void applyLod(Scene& scene, const std::string& perRay = "") const {
     if (lod == "cone") {
       setLodCone(scene);
@@ -160,7 +160,7 @@ struct StrategyFlags {
     }
     if (scene.lodCone && !perRay.empty())
       fail(lod == "cone" ? std::string("--lod") : scene.path + ": strategies.lod",
-           "cone (a λ per ray from its ray cone): {}; use render on the CPU, or a fixed level of detail", perRay);
+           "cone (a λ per ray from its ray cone): {}; use render, or a fixed level of detail", perRay);
     warnLodClamped(scene);
   }
 
@@ -297,7 +297,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   Progress progress(mode);
   progress.phase("loading " + (scenePath.empty() ? std::string("the built-in scene") : scenePath));
   Scene scene = sceneFrom(scenePath);
-  flags.applyLod(scene, deviceFlag == "vulkan" ? "the Vulkan path traces one surface per displacement" : "");
+  flags.applyLod(scene);
   const double loadSeconds = progress.elapsed();
   const AccelOptions accelOpts = flags.resolve(scene);
   if (f.size.empty()) opts.size = scene.imageSize;

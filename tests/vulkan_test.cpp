@@ -7,6 +7,7 @@
 // CPU's and the GPU's answers; the work differs there with the order of the prisms), and
 // the asteroid rendered on Vulkan must match the CPU render. Sized for lavapipe on a
 // 2-core machine (docs/vulkan.md has the timings and the measured parity).
+#include "core/lod.h"
 #include "core/scene.h"
 #include "core/stats.h"
 #include "render/camera.h"
@@ -93,10 +94,10 @@ struct Parity {
 };
 
 // Traces the rays on both devices and compares; prints every disagreement.
-Parity compare(const Scene& s, const std::vector<Ray>& rays, const char* what) {
+Parity compare(const Scene& s, const std::vector<Ray>& rays, const char* what, const AccelOptions& opts = {}) {
   vulkanTestEnv();
-  const EmbreeScene cpu(s, AccelOptions{});
-  vk::VulkanScene gpu(s, AccelOptions{});
+  const EmbreeScene cpu(s, opts);
+  vk::VulkanScene gpu(s, opts);
   double seconds = 0;
   std::vector<RayCounters> counters;
   const std::vector<Hit> g = gpu.trace(rays, &counters, &seconds);
@@ -339,6 +340,63 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
   CHECK(total.hits > total.rays / 10);
 }
 
+TEST_CASE("vulkan: one triangle with a lambda per ray, the GPU runs the CPU's traversal step for step", "[vulkan][lod]") {
+  // One prism: the order of the prisms cannot matter, so the work counters must match
+  // too: a GPU that skipped the hull of the two levels' ranges (LodBandQuery) would
+  // bound less and do less work on some rays, a blend that differs would hit elsewhere.
+  vulkanTestEnv();
+  TraversalConfig cfg;
+  cfg.lodPerRay = true;
+  AccelOptions opts;
+  opts.traversal = cfg;
+  TraversalConfig oracle;
+  oracle.baseline = "bruteforce";
+  size_t rays = 0, agree = 0, bitT = 0, same = 0, blended = 0;
+  for (const test::Scenario& s : test::scenarios()) {
+    const int K = lodLevels(*s.disp.map);
+    if (K < 2) continue;
+    for (size_t k = 0; k < 3; ++k) {
+      const size_t ti = (2 * k + 1) * s.tris.size() / 6;
+      const test::Scenario one{s.name, {s.tris[ti]}, s.disp};
+      const auto cpu = createIntersector(cfg, one.tris, one.disp);
+      const AABB box = cpu->bounds(0);
+      if (box.isEmpty()) continue;
+      const auto bf = createIntersector(oracle, one.tris, one.disp);
+      std::vector<Ray> rs;
+      for (const test::RayCase& c : test::rayFamilies(one, *bf, 16, uint32_t(2000 + 7 * k))) rs.push_back(c.r);
+      for (size_t i = 0; i < rs.size(); ++i) rs[i].lod = float(i % 13) * (float(K) + 1.0f) / 12.0f - 0.5f;
+      vk::VulkanScene gpu(oneTriangleScene(s.tris[ti], s.disp), opts);
+      std::vector<RayCounters> gw;
+      const std::vector<Hit> g = gpu.trace(rs, &gw);
+      for (size_t i = 0; i < rs.size(); ++i) {
+        RayCounters cw;
+        TriangleHit h;
+        bool hit = false;
+        if (!box.intersect(rs[i]).isEmpty() || gw[i].prisms > 0) hit = cpu->intersect(rs[i], 0, h, cw) && h.t < rs[i].tmax;
+        const bool sameHit = hit == g[i].valid();
+        const bool a = sameHit && (!hit || std::abs(h.t - g[i].t) <= 1e-5f * std::max(std::abs(h.t), 1e-3f));
+        const bool b = sameHit && (!hit || h.t == g[i].t);
+        const bool w = sameWork(cw, gw[i]);
+        ++rays, agree += a, bitT += b, same += w;
+        blended += hit && rs[i].lod > 0.0f && rs[i].lod < float(K) && rs[i].lod != std::floor(rs[i].lod);
+        if (!(a && b && w))
+          fmt::print("vulkan step parity with a lambda per ray, {} triangle {}, ray {} (lambda {}): cpu {} t={} | {}\n"
+                     "  vulkan {} t={} | {}\n",
+                     s.name, ti, i, rs[i].lod, hit ? "hit " : "miss", hit ? h.t : 0.0f, workText(cw),
+                     g[i].valid() ? "hit " : "miss", g[i].valid() ? g[i].t : 0.0f, workText(gw[i]));
+      }
+    }
+  }
+  fmt::print("vulkan step parity with a lambda per ray: {} rays ({} hits at a fractional lambda), {} agree, {} "
+             "bit-identical t, {} the same work\n",
+             rays, blended, agree, bitT, same);
+  CHECK(rays > 500);
+  CHECK(blended > 50);
+  CHECK(agree == rays);
+  CHECK(bitT == rays);
+  CHECK(same == rays);
+}
+
 TEST_CASE("vulkan: same hits as the CPU on the asteroid", "[vulkan]") {
   REQUIRE(std::filesystem::exists("/usr/share/glmark2/models/asteroid-low.3ds"));  // scripts/setup.sh
   const Scene s = loadScene(scenePath("asteroid.json"));
@@ -377,6 +435,76 @@ TEST_CASE("vulkan: same hits as the CPU on the tiled quad at lod 1.5", "[vulkan]
   const Parity p = compare(s, testRays(s, {64, 48}, 4096, 4), "quad_tiled at lod 1.5");
   CHECK(p.hits > 2000);
   CHECK(p.agree == p.rays);
+}
+
+TEST_CASE("vulkan: same hits as the CPU with a lambda per ray", "[vulkan][lod]") {
+  // Each ray at its own λ (none, integers, fractions, past the last level): the GPU picks
+  // the ray's level, blends its heights toward the next level and hulls the two levels'
+  // ranges, as the CPU's PerRayLod does (docs/lod.md, "A λ per ray").
+  Scene s = loadScene(scenePath("quad_tiled.json"));
+  setLodCone(s);
+  const int K = lodLevels(*s.meshes[0].displacement->map);
+  REQUIRE(K >= 3);
+  AccelOptions opts;
+  opts.traversal = traversalConfigOf(s);
+  REQUIRE(opts.traversal.lodPerRay);
+  std::vector<Ray> rays = testRays(s, {64, 48}, 4096, 5);
+  const float pick[] = {-1.0f, 0.0f, 0.5f, 1.0f, 1.75f, 2.25f, float(K), float(K) + 3.0f};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, float(K) + 0.5f);
+  for (size_t i = 0; i < rays.size(); ++i) rays[i].lod = i % 3 == 0 ? pick[(i / 3) % 8] : u(rng);
+  const Parity p = compare(s, rays, "quad_tiled, a lambda per ray", opts);
+  CHECK(p.hits > 2000);
+  CHECK(p.agree == p.rays);
+  // The test can tell a GPU that ignored λ: that many rays hit elsewhere at level 0.
+  const EmbreeScene cpu(s, opts);
+  size_t moved = 0;
+  for (const Ray& r : rays) {
+    Ray r0 = r;
+    r0.lod = -1.0f;
+    const Hit a = cpu.intersect(r), b = cpu.intersect(r0);
+    moved += a.valid() != b.valid() || (a.valid() && std::abs(a.t - b.t) > 1e-4f * std::max(std::abs(a.t), 1e-3f));
+  }
+  fmt::print("vulkan parity with a lambda per ray: {} of {} rays hit elsewhere (or not) at level 0\n", moved,
+             rays.size());
+  CHECK(moved > rays.size() / 10);
+}
+
+TEST_CASE("vulkan: --lod cone renders as on the CPU", "[vulkan][lod]") {
+  // The camera rays' λ from their cones (ConeLod, shared), kept by every ray of a path.
+  REQUIRE(std::filesystem::exists("/usr/share/glmark2/models/asteroid-low.3ds"));
+  Scene s = loadScene(scenePath("asteroid.json"));
+  setLodCone(s);
+  s.lodBias = 1.0f;  // coarser: most camera rays above level 0
+  AccelOptions opts;
+  opts.traversal = traversalConfigOf(s);
+  const EmbreeScene cpu(s, opts);
+  vulkanTestEnv();
+  vk::VulkanScene gpu(s, opts);
+  for (const Integrator integ : {Integrator::Primary, Integrator::Path}) {
+    RenderOptions o;
+    o.size = integ == Integrator::Path ? ivec2(48, 36) : ivec2(96, 72);
+    o.integrator = integ;
+    o.progress = nullptr;
+    const RenderResult a = render(s, cpu, o);
+    const RenderResult b = vk::render(s, gpu, o);
+    size_t differ = 0;
+    for (size_t i = 0; i < a.aov.color.pixels.size(); ++i) {
+      const vec3 d = glm::abs(a.aov.color.pixels[i] - b.aov.color.pixels[i]);
+      differ += std::max({d.x, d.y, d.z}) > 1e-6f;
+    }
+    const double mean = a.cameraLodSum / double(a.primaryRays);
+    fmt::print("vulkan render --lod cone {}: {} of {} pixels differ, hits cpu {} vulkan {}, mean camera lambda cpu "
+               "{:.3f} vulkan {:.3f}, at 0: {} / {}\n",
+               integratorName(integ), differ, a.aov.color.pixels.size(), a.hits, b.hits, mean,
+               b.cameraLodSum / double(b.primaryRays), a.cameraLodZero, b.cameraLodZero);
+    CHECK(a.cameraLodSum == b.cameraLodSum);
+    CHECK(a.cameraLodZero == b.cameraLodZero);
+    CHECK(mean > 0.5);
+    CHECK(a.hits == b.hits);
+    CHECK(a.secondaryRays == b.secondaryRays);
+    CHECK(double(differ) <= 0.001 * double(a.aov.color.pixels.size()));
+  }
 }
 
 // Not in CI (hidden; run with "[vulkan_large]"): the parity numbers of docs/vulkan.md, 10^5 rays per scene.

@@ -21,7 +21,7 @@
 
 namespace oblong::vk {
 
-inline constexpr uint32_t kBakeVersion = 3;
+inline constexpr uint32_t kBakeVersion = 4;
 
 struct BakedScene {
   GpuRecords records;

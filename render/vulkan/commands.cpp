@@ -94,6 +94,10 @@ int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOpti
     j["rays"] = {{"primary", res.primaryRays}, {"secondary", res.secondaryRays}, {"hits", res.hits}};
     j["mrays_per_second"] = mrays;
     j["steps_per_camera_ray"] = meanPrimarySteps;
+    if (scene.lodCone && res.primaryRays > 0)
+      j["lod_per_ray"] = {{"bias", scene.lodBias},
+                          {"camera_mean", res.cameraLodSum / double(res.primaryRays)},
+                          {"camera_at_0", double(res.cameraLodZero) / double(res.primaryRays)}};
     j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
     writeJson(statsPath, j);
   }
@@ -115,7 +119,7 @@ int bakeCommand(const Scene& scene, const AccelOptions& opts, ivec2 image, const
   b.maxDepth = defaults.maxDepth;
   for (size_t i = 0; i < rays.size(); ++i) {
     if (!(rays[i].tmin >= 0.0f)) fail("--rays", "ray {}: tmin = {} < 0 (Vulkan needs tmin >= 0)", i, rays[i].tmin);
-    b.rays.push_back({rays[i].o, rays[i].d, rays[i].tmin, rays[i].tmax});
+    b.rays.push_back({rays[i].o, rays[i].d, rays[i].tmin, rays[i].tmax, rays[i].lod, 0.0f});
   }
   writeBake(out, b);
   const auto bytes = std::filesystem::file_size(out);

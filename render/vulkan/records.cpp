@@ -6,6 +6,7 @@
 #include "render/traversal/prism.h"
 
 #include "core/error.h"
+#include "render/traversal/lod_per_ray.h"
 #include "render/traversal/traversal.h"
 #include "render/vulkan/rmip_layout.h"
 #include "render/vulkan/vulkan_scene.h"
@@ -18,9 +19,9 @@ namespace oblong::vk {
 
 using namespace vkgpu;
 
-static_assert(sizeof(RayGpu) == 32 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
+static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1192 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 120 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 136 && sizeof(PushGpu) == 16);
 
 namespace {
 
@@ -80,6 +81,52 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   return g;
 }
 
+// Appends one traversal's records to R and sets m's offsets into them: its map's texels,
+// the CPU traversal's own Rmip (copied as it is), its triangles, and their boxes from
+// `boxes` (the intersector Embree would take them from) in the mesh's frame.
+void appendTraversal(GpuRecords& R, MeshGpu& m, const Intersector& is, const Intersector& boxes, const Mesh& mesh) {
+  const auto* trav = dynamic_cast<const TraversalIntersectorBase*>(&is);
+  if (!trav) fail("--device vulkan", "internal: the canonical intersector is not a traversal");
+  const TraversalMesh& tm = trav->mesh();
+  const Displacement& d = tm.disp;
+  m.triOffset = uint32_t(R.tris.size());
+  m.texelOffset = uint32_t(R.texels.size());
+  m.W = d.map->width(), m.H = d.map->height();
+  m.sampleOffset = float(d.sampleOffset);  // 2^-(k+1): exact in float
+  // A band of a λ per ray reads its own level's structure (and the next level's, which
+  // has a record of its own).
+  const RangeQuery* rq = &trav->rangeQuery();
+  if (const auto* band = dynamic_cast<const LodBandQuery*>(rq)) rq = &band->fine();
+  const auto* rmip = dynamic_cast<const Rmip*>(rq);
+  if (!rmip) fail("--device vulkan", "internal: the canonical intersector's range query is not rmip");
+  const RmipLayout L = RmipLayout::of(*rmip);
+  m.rmipData = uint32_t(R.rmipData.size());
+  m.rmipLayers = uint32_t(R.rmipLayers.size());
+  m.rmipF = L.f, m.rmipW = L.rw, m.rmipH = L.rh, m.rmipP = L.P, m.rmipQ = L.Q, m.rmipWrap = L.wrap;
+  m.rmipBits = L.bits, m.rmipFirst = L.p0, m.rmipBase = L.q.base, m.rmipStep = L.q.step;
+  R.rmipData.insert(R.rmipData.end(), L.words.begin(), L.words.end());
+  R.rmipLayers.insert(R.rmipLayers.end(), L.layers.begin(), L.layers.end());
+  R.rmipBytes += L.bytes();
+  R.texels.insert(R.texels.end(), d.map->texels().begin(), d.map->texels().end());
+  R.texelBytes += d.map->bytes();
+  for (size_t ti = 0; ti < tm.tris.size(); ++ti) {
+    R.tris.push_back(makeTri(tm, ti));
+    AABB b = boxes.bounds(uint32_t(ti));
+    AabbGpu a;
+    if (b.isEmpty()) {  // inactive (NaN min x): the triangle cannot be displaced
+      a = {{std::nanf(""), 0, 0}, {0, 0, 0}};
+    } else {
+      // In the mesh's frame, padded as the CPU pads its world boxes (framePad).
+      BoxD p{dvec3(b.lo), dvec3(b.hi)};
+      p.pad(framePad(b, mesh.origin));
+      b = p.toFloatOutward();
+      a = {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}};
+    }
+    R.aabbs.push_back(a);
+  }
+  R.triBytes += tm.tris.size() * sizeof(TriGpu);
+}
+
 }  // namespace
 
 GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
@@ -95,15 +142,11 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
     fail("--device vulkan", "runs newton with its default parameters only (asked for {})", cfg.inverterParams.dump());
 
   // Host-side records, built with the CPU's own code (createIntersector).
-  auto& tris = R.tris;
   auto& meshes = R.meshes;
-  auto& texels = R.texels;
-  auto& rmipData = R.rmipData;
-  auto& rmipLayers = R.rmipLayers;
   auto& plainIndex = R.plainIndex;
   auto& plainUV = R.plainUV;
   auto& plainPos = R.plainPos;
-  auto& aabbs = R.aabbs;
+  std::vector<MeshGpu> levels;  // a λ per ray: the levels' records, after the scene's meshes
   meshes.assign(scene.meshes.size(), MeshGpu{});
   for (const SceneMesh& sm : scene.meshes) {
     R.meshTriangles.push_back(uint32_t(sm.mesh.triangles.size()));
@@ -129,51 +172,39 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
     std::vector<DisplacedTriangle> dts(mesh.triangles.size());
     for (size_t ti = 0; ti < dts.size(); ++ti) dts[ti] = mesh.triangle(ti);
     const auto is = createIntersector(cfg, dts, d);
-    const auto* trav = dynamic_cast<const TraversalIntersectorBase*>(is.get());
-    if (!trav) fail("--device vulkan", "internal: the canonical intersector is not a traversal");
     R.geometryName = is->name();
-    const TraversalMesh& tm = trav->mesh();
     m.displaced = 1;
-    m.triOffset = uint32_t(tris.size());
-    m.texelOffset = uint32_t(texels.size());
-    m.W = d.map->width(), m.H = d.map->height();
     m.scale = d.scale, m.bias = d.bias, m.tiling = d.tiling;
-    m.sampleOffset = float(d.sampleOffset);  // 2^-(k+1): exact in float
     m.marchingScale = cfg.marchingScale;
     m.inversionInTraversal = cfg.inversionInTraversal;
-    // The CPU traversal's own Rmip (built by createIntersector above), copied as it is.
-    const auto* rmip = dynamic_cast<const Rmip*>(&trav->rangeQuery());
-    if (!rmip) fail("--device vulkan", "internal: the canonical intersector's range query is not rmip");
-    const RmipLayout L = RmipLayout::of(*rmip);
-    m.rmipData = uint32_t(rmipData.size());
-    m.rmipLayers = uint32_t(rmipLayers.size());
-    m.rmipF = L.f, m.rmipW = L.rw, m.rmipH = L.rh, m.rmipP = L.P, m.rmipQ = L.Q, m.rmipWrap = L.wrap;
-    m.rmipBits = L.bits, m.rmipFirst = L.p0, m.rmipBase = L.q.base, m.rmipStep = L.q.step;
-    rmipData.insert(rmipData.end(), L.words.begin(), L.words.end());
-    rmipLayers.insert(rmipLayers.end(), L.layers.begin(), L.layers.end());
-    R.rmipBytes += L.bytes();
-    texels.insert(texels.end(), d.map->texels().begin(), d.map->texels().end());
-    R.texelBytes += d.map->bytes();
-    for (size_t ti = 0; ti < tm.tris.size(); ++ti) {
-      tris.push_back(makeTri(tm, ti));
-      AABB b = is->bounds(uint32_t(ti));
-      AabbGpu a;
-      if (b.isEmpty()) {  // inactive (NaN min x): the triangle cannot be displaced
-        a = {{std::nanf(""), 0, 0}, {0, 0, 0}};
-      } else {
-        // In the mesh's frame, padded as the CPU pads its world boxes (framePad).
-        BoxD p{dvec3(b.lo), dvec3(b.hi)};
-        p.pad(framePad(b, mesh.origin));
-        b = p.toFloatOutward();
-        a = {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}};
+    m.lodNext = -1;
+    if (const auto* perRay = dynamic_cast<const PerRayLod*>(is.get())) {
+      // A λ per ray: one record per level (its map, RMIP and triangles), after the
+      // scene's meshes; the mesh's own record points to them, and its boxes (level 0's
+      // range of AABBs) are the union over the levels, as on the CPU.
+      const MeshGpu common = m;
+      const auto first = uint32_t(scene.meshes.size() + levels.size());
+      const auto K = perRay->levels() - 1;
+      for (size_t k = 0; k <= K; ++k) {
+        MeshGpu L = common;
+        appendTraversal(R, L, perRay->band(k), *is, mesh);
+        L.lod = float(k);
+        L.lodNext = k < K ? int(first + k + 1) : -1;
+        levels.push_back(L);
       }
-      aabbs.push_back(a);
+      m = levels[first - scene.meshes.size()];
+      m.lodLevels = int(K + 1), m.lodFirst = first, m.lodNext = -1;
+    } else {
+      appendTraversal(R, m, *is, *is, mesh);
     }
-    R.triBytes += tm.tris.size() * sizeof(TriGpu);
-    if (texels.size() > size_t(UINT32_MAX) || rmipData.size() > size_t(INT32_MAX))
+    if (R.texels.size() > size_t(UINT32_MAX) || R.rmipData.size() > size_t(INT32_MAX))
       fail("--device vulkan", "the scene's maps exceed the 32-bit offsets of the GPU layout");
   }
   if (R.geometryName.empty()) R.geometryName = "rmip+newton+midpoint2d";
+  // The levels' records have no geometry of their own (no bottom level).
+  meshes.insert(meshes.end(), levels.begin(), levels.end());
+  R.meshTriangles.resize(meshes.size(), 0);
+  R.meshVertices.resize(meshes.size(), 0);
 
   return R;
 }

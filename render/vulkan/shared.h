@@ -48,12 +48,14 @@ using uint = uint32_t;
 // The traversal's constants (stack size, slacks, Newton's tolerance, ...) are in
 // render/traversal/constants.h, shared with the CPU traversal and inversion/newton.h.
 
-// One ray: the CPU's Ray without its level of detail (VulkanScene::trace converts).
+// One ray: the CPU's Ray (lod < 0: none; read by a mesh with a λ per ray only).
 struct RayGpu {
   vec3 o;
   vec3 d;
   float tmin;
   float tmax;
+  float lod;
+  float pad;
 };
 
 // First hit of one ray (mesh = -1: miss).
@@ -123,6 +125,13 @@ struct MeshGpu {
   uint vertexOffset; // plain: first vertex
   float originX, originY, originZ;  // Mesh::origin: the instance's translation
   float sampleOffset;  // Displacement::sampleOffset: uv 0 is at sample -sampleOffset (LoD)
+  // A λ per ray (docs/lod.md): a scene mesh's record has lodLevels > 0 and its levels'
+  // records at lodFirst + k (after the scene's meshes); a ray at λ reads level ⌊λ⌋'s.
+  // A level's record: its λ (= k) and its next level's record (-1: the last level).
+  int lodLevels;
+  uint lodFirst;
+  int lodNext;
+  float lod;
 };
 
 // Intersection -> closest-hit attributes (displaced prisms).

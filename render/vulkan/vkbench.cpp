@@ -89,7 +89,7 @@ struct Bench {
   }
 };
 
-RayGpu toGpu(const Ray& r) { return {r.o, r.d, r.tmin, r.tmax}; }
+RayGpu toGpu(const Ray& r) { return {r.o, r.d, r.tmin, r.tmax, r.lod, 0.0f}; }
 Ray fromGpu(const RayGpu& r) {
   Ray o;
   o.o = r.o, o.d = r.d, o.tmin = r.tmin, o.tmax = r.tmax;
@@ -263,7 +263,12 @@ int run(const Options& o) {
       rngs.push_back(rng);
     }
   }
-  if (!o.raysOut.empty()) writeFile(o.raysOut, camera.data(), camera.size() * sizeof(RayGpu));
+  if (!o.raysOut.empty()) {  // rays_io.h's .bin: 8 float32 a ray
+    std::vector<float> bin;
+    bin.reserve(camera.size() * 8);
+    for (const RayGpu& r : camera) bin.insert(bin.end(), {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax});
+    writeFile(o.raysOut, bin.data(), bin.size() * sizeof(float));
+  }
   if (o.noTrace) {
     if (o.raysOut.empty()) fail("--no-trace", "only applies with --rays-out");
     return 0;

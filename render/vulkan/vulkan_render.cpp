@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "render/camera.h"
+#include "render/cone_lod.h"
 #include "render/sampling.h"
 
 namespace oblong::vk {
@@ -47,8 +48,13 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
     }
   const float aoRadius = opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene);
 
-  // Camera rays: sample 0 through the pixel centre, the others jittered.
+  // Camera rays: sample 0 through the pixel centre, the others jittered; under --lod
+  // cone each gets its λ from its cone by the CPU renderer's rule (ConeLod), and every
+  // ray of its path keeps it (render/renderer.cpp, Tracer::setLod).
   const PinholeCamera cam(scene.camera, opts.size);
+  const RayCone camCone{0.0f, cam.pixelSpread()};
+  std::unique_ptr<ConeLod> cone;
+  if (scene.lodCone) cone = std::make_unique<ConeLod>(scene);
   std::vector<Path> paths(ns);
   std::vector<Ray> rays(ns);
   for (int y = 0; y < H; ++y)
@@ -58,7 +64,10 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
         Path& p = paths[px * spp + s];
         p.rng = Rng(opts.seed * 0x9E3779B97F4A7C15ULL + px, uint64_t(s));
         const float jx = s == 0 ? 0.5f : p.rng.uniform(), jy = s == 0 ? 0.5f : p.rng.uniform();
-        rays[px * spp + s] = cam.generate(x + jx, y + jy);
+        Ray& r = rays[px * spp + s];
+        r = cam.generate(x + jx, y + jy);
+        if (cone) r.lod = cone->lod(r, camCone, scene.lodBias);
+        res.cameraLodSum += std::max(r.lod, 0.0f), res.cameraLodZero += r.lod <= 0.0f;
       }
     }
   std::vector<RayCounters> camera, more;
@@ -93,7 +102,7 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
       const vec3 d = cosineSample(n, p.rng);
       if (glm::dot(d, ng) <= 0) continue;  // below the geometric surface: occluded
       owner.push_back(k);
-      queue.push_back(Ray{spawnOrigin(pt, ng, d), d, 0.0f, aoRadius});
+      queue.push_back(Ray{spawnOrigin(pt, ng, d), d, 0.0f, aoRadius, r.lod});
     } else {
       p.pos = r.at(h.t), p.nrm = n, p.geo = ng, p.mesh = h.mesh, p.alive = true;
     }
@@ -138,7 +147,7 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
           const float cosTheta = glm::dot(p.nrm, wi);
           if (cosTheta <= 0 || glm::dot(p.geo, wi) <= 0) continue;
           shadows.push_back({k, albedo * light.intensity * (cosTheta * falloff / kPi)});
-          queue.push_back(Ray{p.pos + spawnEps(p.pos) * p.geo, wi, 0.0f, dist * (1.0f - 1e-4f)});
+          queue.push_back(Ray{p.pos + spawnEps(p.pos) * p.geo, wi, 0.0f, dist * (1.0f - 1e-4f), rays[k].lod});
         }
       }
       if (!queue.empty()) {
@@ -174,7 +183,7 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
           continue;
         }
         owner.push_back(k);
-        queue.push_back(Ray{spawnOrigin(p.pos, p.geo, d), d, 0.0f, kInfinity});
+        queue.push_back(Ray{spawnOrigin(p.pos, p.geo, d), d, 0.0f, kInfinity, rays[k].lod});
       }
       if (queue.empty()) break;
       const std::vector<Hit> bh = traceQueue(false);

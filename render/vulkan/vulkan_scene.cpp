@@ -34,10 +34,8 @@ std::vector<Hit> VulkanScene::trace(const std::vector<Ray>& rays, std::vector<Ra
   const size_t n = rays.size();
   std::vector<HitGpu> hg(n);
   std::vector<CountersGpu> cg(counters ? n : 0);
-  // The GPU traces each displacement's own surface: a ray's level of detail (Ray::lod,
-  // per-ray LoD) is not carried, and the CLI refuses --lod cone here (docs/vulkan.md).
   std::vector<RayGpu> gpu(n);
-  for (size_t i = 0; i < n; ++i) gpu[i] = RayGpu{rays[i].o, rays[i].d, rays[i].tmin, rays[i].tmax};
+  for (size_t i = 0; i < n; ++i) gpu[i] = RayGpu{rays[i].o, rays[i].d, rays[i].tmin, rays[i].tmax, rays[i].lod, 0.0f};
   run_->trace(gpu.data(), n, hg.data(), counters ? cg.data() : nullptr, anyHit, seconds);
   std::vector<Hit> out(n);
   if (counters) counters->assign(n, RayCounters{});

@@ -14,9 +14,39 @@
 int wrapIndex(int i, int n) {  // HeightMap::wrap; GLSL's % is undefined for negatives
   return i >= 0 ? i % n : n - 1 - ((-i - 1) % n);
 }
+float levelAt(MeshGpu m, int i, int j) {  // HeightMap::at of a record's map
+  return texelAt(m.texelOffset + uint(wrapIndex(j, m.H)) * uint(m.W) + uint(wrapIndex(i, m.W)), m.chunkShift);
+}
+// std::min, std::max and std::clamp as the CPU evaluates them (which argument wins a tie).
+float minCpp(float a, float b) { return b < a ? b : a; }
+float maxCpp(float a, float b) { return a < b ? b : a; }
+float clampCpp(float v, float lo, float hi) { return v < lo ? lo : hi < v ? hi : v; }
+// Displacement::lodHeight: level k's height h at its point (i, j), blended by f toward
+// level k + 1's micro-geometry there (g_next).
+float lodHeight(float h, int i, int j, float f) {
+  int a = i >> 1, b = j >> 1;
+  float p = levelAt(g_next, a, b);
+  bool ei = (i & 1) == 0, ej = (j & 1) == 0;
+  float q = ei && ej ? p : ej ? levelAt(g_next, a + 1, b) : ei ? levelAt(g_next, a, b + 1) : levelAt(g_next, a + 1, b + 1);
+  precise float s = 0.5 * (p + q);
+  float L = clampCpp(s, minCpp(p, q), maxCpp(p, q));
+  precise float w = (1.0 - f) * h + f * L;
+  return clampCpp(w, minCpp(h, L), maxCpp(h, L));
+}
+// Displacement::raw: the ray's blend fraction g_blend is 0 unless it has a λ per ray.
 float mapAt(int i, int j) {
-  return texelAt(g_mesh.texelOffset + uint(wrapIndex(j, g_mesh.H)) * uint(g_mesh.W) + uint(wrapIndex(i, g_mesh.W)),
-                 g_mesh.chunkShift);
+  float h = levelAt(g_mesh, i, j);
+  return g_blend == 0.0 ? h : lodHeight(h, i, j, g_blend);
+}
+// A λ per ray (PerRayLod::intersect, Displacement::blendOf): the record of level ⌊λ⌋
+// (λ clamped to [0, last level]; NaN: 0) and the fraction toward the next level.
+void selectLevel(float rayLod) {
+  float l = rayLod > 0.0 ? rayLod : 0.0;
+  int k = int(min(floor(l), float(g_mesh.lodLevels - 1)));
+  g_mesh = meshes[g_mesh.lodFirst + uint(k)];
+  if (g_mesh.lodNext < 0) return;
+  g_next = meshes[g_mesh.lodNext];
+  if (rayLod > g_mesh.lod) g_blend = min(float(double(rayLod) - double(g_mesh.lod)), 1.0);
 }
 // Displacement::sampleToUV
 vec2 sampleToUV(int i, int j) {

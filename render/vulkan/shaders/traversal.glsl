@@ -86,9 +86,9 @@ void wrapAxis(int a0, int a1, int n, out int s, out int e) {
   s = wrapIndex(a0, n);
   e = s + (a1 - a0);
 }
-void toPixels(int a0, int a1, int size, int n, out int s, out int e) {
+void toPixels(MeshGpu m, int a0, int a1, int size, int n, out int s, out int e) {
   wrapAxis(a0, a1, size, s, e);
-  int f = g_mesh.rmipF;
+  int f = m.rmipF;
   if (f == 1) return;
   e = e < size ? e / f : n + (e - size) / f;
   s /= f;
@@ -98,26 +98,26 @@ void toPixels(int a0, int a1, int size, int n, out int s, out int e) {
   }
 }
 // Quantizer16::decode, unfused as on the CPU.
-float rmipDecode(uint code) {
-  precise float scaled = float(code) * g_mesh.rmipStep;
-  precise float v = g_mesh.rmipBase + scaled;
+float rmipDecode(MeshGpu m, uint code) {
+  precise float scaled = float(code) * m.rmipStep;
+  precise float v = m.rmipBase + scaled;
   return v;
 }
 // Entry idx of the mesh's layers (bits 16: one word of codes; bits 32: two float words).
-vec2 rmipEntry(uint idx) {
-  if (g_mesh.rmipBits == 16) {
-    uint w = rmipWordAt(g_mesh.rmipData + idx, g_mesh.chunkShift);
-    return vec2(rmipDecode(w & 0xffffu), rmipDecode(w >> 16));
+vec2 rmipEntry(MeshGpu m, uint idx) {
+  if (m.rmipBits == 16) {
+    uint w = rmipWordAt(m.rmipData + idx, m.chunkShift);
+    return vec2(rmipDecode(m, w & 0xffffu), rmipDecode(m, w >> 16));
   }
-  uint at = g_mesh.rmipData + 2u * idx;
-  return vec2(uintBitsToFloat(rmipWordAt(at, g_mesh.chunkShift)), uintBitsToFloat(rmipWordAt(at + 1u, g_mesh.chunkShift)));
+  uint at = m.rmipData + 2u * idx;
+  return vec2(uintBitsToFloat(rmipWordAt(at, m.chunkShift)), uintBitsToFloat(rmipWordAt(at + 1u, m.chunkShift)));
 }
-vec2 rmipBlock(int x0, int x1, int y0, int y1) {
-  int p = clamp(findMSB(x1 - x0 + 1), g_mesh.rmipFirst, g_mesh.rmipP);
-  int q = clamp(findMSB(y1 - y0 + 1), g_mesh.rmipFirst, g_mesh.rmipQ);
-  ivec4 L = rmipLayers[g_mesh.rmipLayers + uint(p * (g_mesh.rmipQ + 1) + q)];  // offset, nx, shiftX, shiftY
+vec2 rmipBlock(MeshGpu m, int x0, int x1, int y0, int y1) {
+  int p = clamp(findMSB(x1 - x0 + 1), m.rmipFirst, m.rmipP);
+  int q = clamp(findMSB(y1 - y0 + 1), m.rmipFirst, m.rmipQ);
+  ivec4 L = rmipLayers[m.rmipLayers + uint(p * (m.rmipQ + 1) + q)];  // offset, nx, shiftX, shiftY
   int lx = 1 << p, ly = 1 << q;
-  int rw = g_mesh.rmipW, rh = g_mesh.rmipH;
+  int rw = m.rmipW, rh = m.rmipH;
   vec2 r = vec2(kInfF, -kInfF);
   for (int cy = y0;; cy += ly) {
     bool lastY = cy + ly - 1 >= y1;
@@ -126,7 +126,7 @@ vec2 rmipBlock(int x0, int x1, int y0, int y1) {
     for (int cx = x0;; cx += lx) {
       bool lastX = cx + lx - 1 >= x1;
       if (lastX) cx = max(x1 - lx + 1, x0);
-      vec2 v = rmipEntry(uint(L.x) + row + uint((cx >= rw ? cx - rw : cx) >> L.z));
+      vec2 v = rmipEntry(m, uint(L.x) + row + uint((cx >= rw ? cx - rw : cx) >> L.z));
       r.x = v.x < r.x ? v.x : r.x;
       r.y = r.y < v.y ? v.y : r.y;
       if (lastX) break;
@@ -135,24 +135,38 @@ vec2 rmipBlock(int x0, int x1, int y0, int y1) {
   }
   return r;
 }
-vec2 rmipRawRange(int sx0, int sy0, int sx1, int sy1) {
+vec2 rmipRawRange(MeshGpu m, int sx0, int sy0, int sx1, int sy1) {
   int x0, x1, y0, y1;
-  int rw = g_mesh.rmipW, rh = g_mesh.rmipH;
-  toPixels(sx0, sx1, g_mesh.W, rw, x0, x1);
-  toPixels(sy0, sy1, g_mesh.H, rh, y0, y1);
+  int rw = m.rmipW, rh = m.rmipH;
+  toPixels(m, sx0, sx1, m.W, rw, x0, x1);
+  toPixels(m, sy0, sy1, m.H, rh, y0, y1);
   // Wrapping corners stored, or no crossing: one block. Else split at the border (one
   // call site for rmipBlock: the shader is inlined).
-  bool one = g_mesh.rmipWrap != 0 || (x1 < rw && y1 < rh);
+  bool one = m.rmipWrap != 0 || (x1 < rw && y1 < rh);
   int xa[2] = int[2](x0, 0), xb[2] = int[2](one ? x1 : min(x1, rw - 1), x1 - rw);
   int ya[2] = int[2](y0, 0), yb[2] = int[2](one ? y1 : min(y1, rh - 1), y1 - rh);
   int nb = one || y1 < rh ? 1 : 2, na = one || x1 < rw ? 1 : 2;
   vec2 r = vec2(kInfF, -kInfF);
   for (int b = 0; b < nb; ++b)
     for (int a = 0; a < na; ++a) {
-      vec2 v = rmipBlock(xa[a], xb[a], ya[b], yb[b]);
+      vec2 v = rmipBlock(m, xa[a], xb[a], ya[b], yb[b]);
       r.x = min(r.x, v.x);
       r.y = max(r.y, v.y);
     }
+  return r;
+}
+// LodBandQuery::rawRange: under a λ per ray, the hull of this level's range and the
+// next level's over the coarse samples around it (one call site for rmipRawRange).
+vec2 rangeRaw(int sx0, int sy0, int sx1, int sy1) {
+  vec2 r = vec2(kInfF, -kInfF);
+  int n = g_mesh.lodNext >= 0 ? 2 : 1;
+  for (int s = 0; s < n; ++s) {
+    MeshGpu m = s == 0 ? g_mesh : g_next;
+    int sh = s == 0 ? 0 : 1;
+    vec2 v = rmipRawRange(m, sx0 >> sh, sy0 >> sh, (sx1 + s) >> sh, (sy1 + s) >> sh);
+    r.x = min(r.x, v.x);
+    r.y = max(r.y, v.y);
+  }
   return r;
 }
 // Displacement::toHeight
@@ -209,7 +223,7 @@ dvec2 dirLocal() {
 bool clipToCells(ivec2 clo, ivec2 chi, inout double t0, inout double t1) {
   ivec2 o = TRI.origin;
   ++g_rangeQueries;
-  vec2 h = toHeight(rmipRawRange(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
+  vec2 h = toHeight(rangeRaw(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
   dvec2 lo = max(dvec2(clo), g_sbLo), hi = min(dvec2(chi + 1), g_sbHi);
   dvec3 blo, bhi;
   boxOverRect(double(TRI.minNormalLength), lo, hi, double(h.x), double(h.y), g_boxPad, blo, bhi);

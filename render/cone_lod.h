@@ -1,0 +1,44 @@
+// The ray-cone rule of a level of detail per ray (docs/lod.md, "A λ per ray"): a ray's
+// footprint where it meets the undisplaced base meshes, in texels of the base triangle
+// it meets. The CPU renderer (through EmbreeScene) and the Vulkan renderer share it, so
+// both trace every ray at the same λ.
+#pragma once
+
+#include "core/scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <vector>
+
+namespace oblong {
+
+// A ray cone (Akenine-Möller et al., "Texture Level of Detail Strategies for Real-Time
+// Ray Tracing", Ray Tracing Gems 2019, ch. 20): the footprint's width at the ray's
+// origin and its spread angle; at distance t it is width + spread·t wide.
+struct RayCone {
+  float width = 0.0f, spread = 0.0f;
+  RayCone at(float t) const { return {width + spread * t, spread}; }
+};
+
+class ConeLod {
+ public:
+  // An Embree scene of the displaced meshes' base triangles and each one's texel size
+  // in world units. device: where to build it (its memory monitor then counts it); null:
+  // a device of its own.
+  explicit ConeLod(const Scene& scene, RTCDevice device = nullptr);
+  ~ConeLod();
+  ConeLod(const ConeLod&) = delete;
+  ConeLod& operator=(const ConeLod&) = delete;
+
+  // The level of detail of a ray with cone c: the cone's width where the ray meets the
+  // base meshes, over that triangle's texel size, log2, plus bias, clamped to [0, 64];
+  // 0 when the ray misses them.
+  float lod(const Ray& r, const RayCone& c, float bias) const;
+
+ private:
+  RTCDevice device_ = nullptr;  // retained (ours or the caller's), released with the scene
+  RTCScene base_ = nullptr;
+  std::vector<std::vector<float>> texel_;  // by geometry id, then primitive
+};
+
+}  // namespace oblong
