@@ -70,8 +70,12 @@ OBLONG_INLINE int quadraticRoots(double q2, double q1, double q0, OBLONG_OUT dou
     OBLONG_PRECISE double x = w[k];
     OBLONG_PRECISE double delta = 1e-13 * (abs(q2) * x * x + abs(q1 * x) + abs(q0));
     OBLONG_PRECISE double slope = abs(2.0 * q2 * x + q1);
-    OBLONG_PRECISE double p = slope > 0.0 ? delta / slope : kInfD;
-    if (abs(q2) > 0.0) p = min(p, sqrt(delta / abs(q2)));
+    // min(δ / |q'|, √(δ / |q2|)), the square root only where it is the smaller
+    // (δ·|q2| ≥ q'²; at a near-tie the two agree to rounding).
+    OBLONG_PRECISE double a2 = abs(q2);
+    OBLONG_PRECISE double p = kInfD;
+    if (a2 > 0.0 && !(delta * a2 < slope * slope)) p = sqrt(delta / a2);
+    else if (slope > 0.0) p = delta / slope;
     pad[k] = 4.0 * p + 1e-14 * abs(x);
   }
   return n;
