@@ -354,6 +354,11 @@ class RayPatch final : public SplitContext {
       for (int i = sx > 0 ? clo.x : chi.x; sx > 0 ? i <= chi.x : i >= clo.x; i += sx) testCell(i, j);
   }
 
+  // An endpoint whose major coordinate may be c (within its pad).
+  static bool atEnd(const CurvePoint& e, int ax, double c) {
+    return std::abs(c - e.uv[ax]) <= e.pad[ax] * OBLONG_TRAV_END_PAD_REL + OBLONG_TRAV_END_PAD_ABS;
+  }
+
   // The minor coordinate range of the monotone piece where its major coordinate is c.
   void minorAt(const CurvePiece& p, int ax, double c, double& wlo, double& whi) const {
     const int mi = 1 - ax;
@@ -362,7 +367,7 @@ class RayPatch final : public SplitContext {
     // An endpoint whose major coordinate may be c (within its pad): the sub-arc may
     // start or end there.
     for (const CurvePoint* e : {&p.a, &p.b})
-      if (std::abs(c - e->uv[ax]) <= e->pad[ax] * OBLONG_TRAV_END_PAD_REL + OBLONG_TRAV_END_PAD_ABS) {
+      if (atEnd(*e, ax, c)) {
         wlo = std::min(wlo, e->uv[mi] - e->pad[mi]);
         whi = std::max(whi, e->uv[mi] + e->pad[mi]);
       }
@@ -392,13 +397,30 @@ class RayPatch final : public SplitContext {
     ivec2 clo, chi;
     if (!snap(lo - dilation_, hi + dilation_, clo, chi)) return;
     const int sa = d[ax] >= 0 ? 1 : -1, sm = d[mi] >= 0 ? 1 : -1;
+    // Where a column's minor range cannot narrow its rows, its two solves are skipped;
+    // the cells tested stay exactly the same:
+    // - every row any column could get is one row: minorAt stays within the piece's
+    //   minor range, so a column's rows lie in [mLo − η, mHi + η] with the snap's η
+    //   below etaMax (twice the bound, for its rounding);
+    // - the column spans the whole piece and minorAt's endpoint test holds for one
+    //   endpoint at each end: the two ranges then join to the piece's minor range.
+    const double mLo = lo[mi] - dilation_[mi], mHi = hi[mi] + dilation_[mi];
+    const double etaMax = 2.0 * OBLONG_TRAV_SNAP_ETA * (1 + 2 * std::max(std::abs(mLo), std::abs(mHi)));
+    const bool oneRow = std::floor(mLo - etaMax) == std::floor(mHi + etaMax);
+    const bool endsAtEndpoints = (atEnd(p.a, ax, lo[ax]) && atEnd(p.b, ax, hi[ax])) ||
+                                 (atEnd(p.b, ax, lo[ax]) && atEnd(p.a, ax, hi[ax]));
     for (int k = sa > 0 ? clo[ax] : chi[ax]; sa > 0 ? k <= chi[ax] : k >= clo[ax]; k += sa) {
       // The piece's points whose major coordinate is within ε of column k.
       const double c0 = std::max(k - dilation_[ax], lo[ax]), c1 = std::min(k + 1 + dilation_[ax], hi[ax]);
       if (c0 > c1) continue;
       double a0, a1, b0, b1;
-      minorAt(p, ax, c0, a0, a1);
-      minorAt(p, ax, c1, b0, b1);
+      if (oneRow || (endsAtEndpoints && c0 == lo[ax] && c1 == hi[ax])) {
+        a0 = b0 = lo[mi];
+        a1 = b1 = hi[mi];
+      } else {
+        minorAt(p, ax, c0, a0, a1);
+        minorAt(p, ax, c1, b0, b1);
+      }
       // Monotone: in between, the minor coordinate lies between its values at c0 and c1.
       const double wlo = std::min(a0, b0) - dilation_[mi], whi = std::max(a1, b1) + dilation_[mi];
       const double eta = OBLONG_TRAV_SNAP_ETA * (1 + std::abs(wlo) + std::abs(whi));
