@@ -481,9 +481,9 @@ TEST_CASE("vulkan: --lod cone renders as on the CPU", "[vulkan][lod]") {
   const EmbreeScene cpu(s, opts);
   vulkanTestEnv();
   vk::VulkanScene gpu(s, opts);
-  for (const Integrator integ : {Integrator::Primary, Integrator::Path}) {
+  for (const Integrator integ : {Integrator::Primary, Integrator::AO, Integrator::Path}) {
     RenderOptions o;
-    o.size = integ == Integrator::Path ? ivec2(48, 36) : ivec2(96, 72);
+    o.size = integ == Integrator::Primary ? ivec2(96, 72) : ivec2(48, 36);
     o.integrator = integ;
     o.progress = nullptr;
     const RenderResult a = render(s, cpu, o);
