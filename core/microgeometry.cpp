@@ -37,6 +37,9 @@ MicroCells::MicroCells(const DisplacedTriangle& tri, const Displacement& disp, f
     if (uvLess(T_.t[B], T_.t[A])) std::swap(A, B);
     const int opp = 3 - A - B;
     E_[e] = {A, B, S_[A], S_[B], orient(S_[A], S_[B], S_[opp]) > 0 ? 1.0 : -1.0};
+    // σ·orient grows with x where σ·(SB − SA).y < 0 and with y where σ·(SB − SA).x > 0.
+    const dvec2 d = E_[e].SB - E_[e].SA;
+    least_[e] = ivec2(E_[e].sigma * d.y < 0 ? 0 : 1, E_[e].sigma * d.x > 0 ? 0 : 1);
   }
 }
 
@@ -165,8 +168,10 @@ int MicroCells::clip(int e, const PV* in, int n, PV* out) const {
 }
 
 bool MicroCells::interior(int i, int j) const {
-  return strictlyInside(dvec2(i, j)) && strictlyInside(dvec2(i + 1, j)) && strictlyInside(dvec2(i, j + 1)) &&
-         strictlyInside(dvec2(i + 1, j + 1));
+  // All four corners strictly inside every edge: per edge, its least corner (least_).
+  for (int e = 0; e < 3; ++e)
+    if (!(E_[e].sigma * orient(E_[e].SA, E_[e].SB, dvec2(i + least_[e].x, j + least_[e].y)) > 0)) return false;
+  return true;
 }
 
 MicroVertex MicroCells::gridInterior(int i, int j, GridVertexCache& cache) const {
@@ -216,9 +221,7 @@ int MicroCells::clipped(int i, int j, MicroTriangle* out, GridVertexCache* cache
     const dvec2 d = E_[e].SB - E_[e].SA;
     const double margin = 1e-9 * (std::abs(d.x) + std::abs(d.y)) *
                           (1.0 + std::abs(double(i)) + std::abs(double(j)) + std::abs(E_[e].SA.x) + std::abs(E_[e].SA.y));
-    double least = std::numeric_limits<double>::infinity();
-    for (int c = 0; c < 4; ++c)
-      least = std::min(least, E_[e].sigma * orient(E_[e].SA, E_[e].SB, dvec2(i + (c & 1), j + (c >> 1))));
+    const double least = E_[e].sigma * orient(E_[e].SA, E_[e].SB, dvec2(i + least_[e].x, j + least_[e].y));
     clipAgainst[e] = !(least > margin);
   }
   int count = 0;

@@ -120,6 +120,10 @@ class MicroCells {
   float f_;
   dvec2 S_[3];
   micro::EdgeInfo E_[3];  // edge e joins vertices e and (e+1)%3
+  // Per edge, the corner of a cell (offset 0 or 1 on each axis) where σ·orient, as
+  // computed, is least: every rounding step of orient is monotone in each coordinate
+  // of the point, so it is the same corner for every cell (interior, clipped).
+  ivec2 least_[3];
 };
 
 // Calls emit for every micro-triangle of T over the cells in `cells` (all of T's cells

@@ -80,6 +80,54 @@ TEST_CASE("cells wholly inside T are two flat triangles on the grid", "[microgeo
 
 // Through the pre-tessellation, the traversal (canonical, and the driver with TFDM's
 // mipmap and quad-tree splits) and every exact baseline (tfdm, ...).
+TEST_CASE("a cell's least corner per edge decides as all four corners do", "[microgeometry]") {
+  // MicroCells::interior tests one corner per edge (the computed σ·orient is monotone in
+  // each coordinate): the same answer as testing the four corners, on every cell around
+  // random triangles, with edges of every slope sign and of zero slope.
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(37, 23, 5));
+  const Displacement d{map, 0.2f, -0.5f, vec2(2.0f, 3.0f)};
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<float> U(-0.3f, 1.3f);
+  size_t cells = 0, inner = 0;
+  for (int iter = 0; iter < 60; ++iter) {
+    vec2 t[3] = {vec2(U(rng), U(rng)), vec2(U(rng), U(rng)), vec2(U(rng), U(rng))};
+    if (iter % 3 == 1) t[1].y = t[0].y;  // a horizontal edge
+    if (iter % 3 == 2) t[2].x = t[1].x;  // a vertical edge
+    DisplacedTriangle T;
+    T.p[0] = vec3(0, 0, 0), T.p[1] = vec3(1.3f, 0.1f, 0), T.p[2] = vec3(0.2f, 1.1f, 0.3f);
+    for (int k = 0; k < 3; ++k) T.n[k] = vec3(0, 0, 1), T.t[k] = t[k];
+    if (!T.prepare()) continue;
+    const MicroCells mc(T, d);
+    dvec2 S[3];
+    for (int k = 0; k < 3; ++k) S[k] = d.toSample(t[k]);
+    const auto orient = [](const dvec2& a, const dvec2& b, const dvec2& p) {
+      return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+    };
+    const double side = orient(S[0], S[1], S[2]);
+    const auto strictly = [&](const dvec2& p) {  // the definition: strictly inside every edge
+      for (int e = 0; e < 3; ++e) {
+        int A = e, B = (e + 1) % 3;
+        if (t[B].x < t[A].x || (t[B].x == t[A].x && t[B].y < t[A].y)) std::swap(A, B);
+        const double s = orient(S[A], S[B], S[3 - A - B]) > 0 ? 1.0 : -1.0;
+        if (!(s * orient(S[A], S[B], p) > 0)) return false;
+      }
+      return true;
+    };
+    if (side == 0) continue;
+    const dvec2 lo = glm::min(glm::min(S[0], S[1]), S[2]), hi = glm::max(glm::max(S[0], S[1]), S[2]);
+    for (int j = int(std::floor(lo.y)) - 1; j <= int(std::floor(hi.y)) + 1; ++j)
+      for (int i = int(std::floor(lo.x)) - 1; i <= int(std::floor(hi.x)) + 1; ++i) {
+        const bool all = strictly(dvec2(i, j)) && strictly(dvec2(i + 1, j)) && strictly(dvec2(i, j + 1)) &&
+                         strictly(dvec2(i + 1, j + 1));
+        CHECK(mc.interior(i, j) == all);
+        ++cells, inner += all;
+      }
+  }
+  INFO(cells << " cells, " << inner << " interior");
+  CHECK(inner > 100);
+  CHECK(cells > 10 * inner / 9);
+}
+
 TEST_CASE("a closed displaced torus leaks no ray shot from inside", "[microgeometry][watertight][traversal]") {
   Scene s;
   SceneMesh torus;
