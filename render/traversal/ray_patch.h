@@ -409,7 +409,36 @@ class RayPatch final : public SplitContext {
     const bool oneRow = std::floor(mLo - etaMax) == std::floor(mHi + etaMax);
     const bool endsAtEndpoints = (atEnd(p.a, ax, lo[ax]) && atEnd(p.b, ax, hi[ax])) ||
                                  (atEnd(p.b, ax, lo[ax]) && atEnd(p.a, ax, hi[ax]));
+    // Once a hit is known, cells past the curve's point at the best hit's limit t* cannot
+    // hold a better one: the piece is monotone, so its points before t* lie on this side
+    // of that point's (padded) coordinates, and every hit lies within ε of its cell. Hits
+    // at t outside the piece are other pieces' to find. Per axis, only where the piece's
+    // direction along it is certain.
+    const int sgn[2] = {ax == 0 ? sa : sm, ax == 0 ? sm : sa};
+    bool certain[2], stopAxis[2] = {false, false};
+    for (int a = 0; a < 2; ++a) certain[a] = std::abs(d[a]) > p.a.pad[a] + p.b.pad[a];
+    bool stopSet = !certain[0] && !certain[1];
+    dvec2 stop(0.0);
+    auto setStop = [&] {  // false when no cell of the piece can hold a better hit
+      stopSet = true;
+      const double tStar = bestLimit();
+      if (tStar <= p.a.t) return false;
+      CurvePoint m;
+      if (tStar < p.b.t && invertAt(tStar, m))
+        for (int a = 0; a < 2; ++a)
+          if (certain[a]) {
+            const double margin = m.pad[a] + p.a.pad[a] + p.b.pad[a];
+            stop[a] = sgn[a] > 0 ? m.uv[a] + margin : m.uv[a] - margin;
+            stopAxis[a] = true;
+          }
+      return true;
+    };
+    auto past = [&](int a, int k) {
+      return stopAxis[a] && (sgn[a] > 0 ? k - dilation_[a] > stop[a] : k + 1 + dilation_[a] < stop[a]);
+    };
     for (int k = sa > 0 ? clo[ax] : chi[ax]; sa > 0 ? k <= chi[ax] : k >= clo[ax]; k += sa) {
+      if (!stopSet && hit_.found && !setStop()) return;
+      if (past(ax, k)) return;
       // The piece's points whose major coordinate is within ε of column k.
       const double c0 = std::max(k - dilation_[ax], lo[ax]), c1 = std::min(k + 1 + dilation_[ax], hi[ax]);
       if (c0 > c1) continue;
@@ -426,6 +455,8 @@ class RayPatch final : public SplitContext {
       const double eta = OBLONG_TRAV_SNAP_ETA * (1 + std::abs(wlo) + std::abs(whi));
       const int j0 = std::max(int(std::floor(wlo - eta)), clo[mi]), j1 = std::min(int(std::floor(whi + eta)), chi[mi]);
       for (int j = sm > 0 ? j0 : j1; sm > 0 ? j <= j1 : j >= j0; j += sm) {
+        if (!stopSet && hit_.found && !setStop()) return;
+        if (past(mi, j)) break;
         if (ax == 0) testCell(k, j);
         else testCell(j, k);
       }

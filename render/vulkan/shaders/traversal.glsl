@@ -807,6 +807,10 @@ int g_gi, g_gj, g_gsx, g_gsy;
 CurvePoint g_ma, g_mb;
 int g_mAx, g_mSa, g_mSm, g_mK, g_mJ, g_mJ0, g_mJ1;
 bool g_mCol;
+// RayPatch::march's stop: cells past the curve's point at the best hit's limit.
+bool g_mStopSet;
+bvec2 g_mCertain, g_mStopAxis;
+dvec2 g_mStop;
 
 void startCells(ivec2 clo, ivec2 chi) {
   g_gen = 1;
@@ -833,6 +837,31 @@ void startMarch(CurvePoint a, CurvePoint b) {
   g_mSm = d[mi] >= 0.0 ? 1 : -1;
   g_mK = g_mSa > 0 ? clo[ax] : chi[ax];
   g_mCol = false;
+  for (int k = 0; k < 2; ++k) g_mCertain[k] = abs(d[k]) > a.pad[k] + b.pad[k];
+  g_mStopSet = !g_mCertain.x && !g_mCertain.y;
+  g_mStopAxis = bvec2(false);
+  g_mStop = dvec2(0.0);
+}
+
+// False when no cell of the marched piece can hold a better hit (RayPatch::march).
+bool setStop() {
+  g_mStopSet = true;
+  double tStar = bestLimit();
+  if (tStar <= g_ma.t) return false;
+  CurvePoint m;
+  if (tStar < g_mb.t && invertAt(tStar, m))
+    for (int k = 0; k < 2; ++k)
+      if (g_mCertain[k]) {
+        precise double margin = m.pad[k] + g_ma.pad[k] + g_mb.pad[k];
+        int sg = k == g_mAx ? g_mSa : g_mSm;
+        g_mStop[k] = sg > 0 ? m.uv[k] + margin : m.uv[k] - margin;
+        g_mStopAxis[k] = true;
+      }
+  return true;
+}
+bool pastStop(int a, int k) {
+  int sg = a == g_mAx ? g_mSa : g_mSm;
+  return g_mStopAxis[a] && (sg > 0 ? double(k) - g_eps[a] > g_mStop[a] : double(k + 1) + g_eps[a] < g_mStop[a]);
 }
 
 // RayPatch::minorAt: the minor coordinate range of the marched piece where its major
@@ -888,6 +917,8 @@ bool nextCell(out int ci, out int cj) {
   for (;;) {
     if (!g_mCol) {
       if (g_mSa > 0 ? g_mK > g_gHi[ax] : g_mK < g_gLo[ax]) return false;
+      if (!g_mStopSet && g_found && !setStop()) return false;
+      if (pastStop(ax, g_mK)) return false;
       dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
       precise double c0 = max(double(g_mK) - g_eps[ax], lo[ax]), c1 = min(double(g_mK + 1) + g_eps[ax], hi[ax]);
       if (c0 > c1) {
@@ -904,6 +935,12 @@ bool nextCell(out int ci, out int cj) {
       g_mCol = true;
     }
     if (g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0) {
+      if (!g_mStopSet && g_found && !setStop()) return false;
+      if (pastStop(mi, g_mJ)) {
+        g_mCol = false;
+        g_mK += g_mSa;
+        continue;
+      }
       ci = ax == 0 ? g_mK : g_mJ;
       cj = ax == 0 ? g_mJ : g_mK;
       g_mJ += g_mSm;
