@@ -288,6 +288,7 @@ TEST_CASE("a scene updated after map edits traces as one built on the edited map
           REQUIRE(sa.size() == sb.size());
           REQUIRE(std::equal(sa.begin(), sa.end(), sb.begin()));
           REQUIRE(ta->mesh().cellDelta == tb->mesh().cellDelta);
+          REQUIRE(ta->mesh().lastDelta == tb->mesh().lastDelta);
         }
         for (uint32_t i = 0; i < isect->size(); ++i) {
           const AABB a = isect->bounds(i), b = freshIsect->bounds(i);

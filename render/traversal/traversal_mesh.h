@@ -126,6 +126,7 @@ struct TraversalMesh {
   int deltaBlocks = 0;
   std::vector<float> blockDelta, rowDelta;
   std::vector<Interval> lastHeights;  // each prism's heights (range query over T's uv box)
+  std::vector<float> lastDelta;       // each prism's cell delta (localCellDelta)
 
   // Builds the per-triangle constants; heights(T) is [hmin, hmax] over T's uv box.
   template <typename Heights>
@@ -145,12 +146,39 @@ struct TraversalMesh {
       blocks[b] = cellRowDelta(*disp.map, j, b * kDeltaBlock, std::min(W, (b + 1) * kDeltaBlock));
     rowDelta[size_t(j)] = *std::max_element(blocks, blocks + deltaBlocks);
   }
+  // The largest cell delta over the cells in c (their rows' blocks): the bulge bound
+  // needs only the cells a triangle's micro-triangles lie in, and relief is rarely as
+  // rough everywhere as at its roughest. Under a per-ray blend, the map-wide bound of
+  // both levels (cellDelta).
+  float localCellDelta(const CellRange& c) const {
+    if (disp.next) return cellDelta;
+    const int W = disp.map->width(), H = disp.map->height();
+    const int64_t rows = std::min<int64_t>(int64_t(c.y1) - c.y0 + 1, H);
+    const int64_t cols = int64_t(c.x1) - c.x0 + 1;
+    const int i0 = HeightMap::wrap(c.x0, W);
+    const int64_t i1 = i0 + cols - 1;  // may pass W: wrap
+    float best = 0;
+    for (int64_t r = 0; r < rows; ++r) {
+      const int j = HeightMap::wrap(int(int64_t(c.y0) + r), H);
+      if (cols >= W) {
+        best = std::max(best, rowDelta[size_t(j)]);
+        continue;
+      }
+      const float* blocks = blockDelta.data() + size_t(j) * deltaBlocks;
+      const int b1 = int(std::min<int64_t>(i1, W - 1) / kDeltaBlock);
+      for (int b = i0 / kDeltaBlock; b <= b1; ++b) best = std::max(best, blocks[b]);
+      if (i1 >= W)
+        for (int b = 0; b <= int((i1 - W) / kDeltaBlock); ++b) best = std::max(best, blocks[b]);
+    }
+    return best;
+  }
   size_t bytes() const {
     return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
            cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
            prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
            (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB) +
-           (blockDelta.capacity() + rowDelta.capacity()) * sizeof(float) + lastHeights.capacity() * sizeof(Interval);
+           (blockDelta.capacity() + rowDelta.capacity() + lastDelta.capacity()) * sizeof(float) +
+           lastHeights.capacity() * sizeof(Interval);
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
@@ -206,6 +234,7 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
   originBudget.assign(tris.size(), -1.0);
   budgetPad.assign(tris.size(), 0.0);
   lastHeights.assign(tris.size(), Interval{});
+  lastDelta.assign(tris.size(), 0.0f);
   for (size_t i = 0; i < tris.size(); ++i) buildTriangle(i, heights);
 }
 
@@ -216,7 +245,8 @@ void TraversalMesh::buildTriangle(size_t i, Heights&& heights) {
   cells[i] = cellsOverlapping(T, d);
   const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
   if (ok) lastHeights[i] = heights(T);
-  params[i] = ok ? analyzeShell(T, d, lastHeights[i], cellDelta) : PrismParams{};
+  lastDelta[i] = localCellDelta(cells[i]);
+  params[i] = ok ? analyzeShell(T, d, lastHeights[i], lastDelta[i]) : PrismParams{};
   if (!params[i].valid) return;
   frames[i] = LocalFrame::make(T, d);
   // Origins up to 16 times the triangle's own extent from the world origin (plus 16).
@@ -250,21 +280,17 @@ std::vector<uint32_t> TraversalMesh::update(const SampleRange& changed, Heights&
       rowDeltaOf(j, c0 / kDeltaBlock, c1 / kDeltaBlock + 1);
     }
   }
-  const float delta = *std::max_element(rowDelta.begin(), rowDelta.end());
-  const bool all = delta != cellDelta;
-  cellDelta = delta;
+  cellDelta = *std::max_element(rowDelta.begin(), rowDelta.end());
   // A prism depends on the map only through its heights (a range query over T's uv box)
-  // and the largest cell delta. A query can read stored entries well beyond the box (a
-  // pyramid's blocks, a mipmap's nodes, a safety zone's box, a global fallback), so each
-  // triangle's heights are asked again: a few lookups per triangle, and exactly the
-  // prisms whose inputs changed are rebuilt.
+  // and the largest cell delta over its cells. A query can read stored entries well
+  // beyond the box (a pyramid's blocks, a mipmap's nodes, a safety zone's box, a global
+  // fallback), so each triangle's heights and delta are asked again: a few lookups per
+  // triangle, and exactly the prisms whose inputs changed are rebuilt.
   std::vector<uint32_t> touched;
   for (size_t i = 0; i < tris.size(); ++i) {
-    if (!all) {
-      const DisplacedTriangle& T = tris[i];
-      const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
-      if (!ok || heights(T) == lastHeights[i]) continue;
-    }
+    const DisplacedTriangle& T = tris[i];
+    const bool ok = T.uvArea2 != 0.0f && T.area > 0.0f && T.minNormalLength > 1e-6f && std::isfinite(T.area);
+    if (!ok || (localCellDelta(cells[i]) == lastDelta[i] && heights(T) == lastHeights[i])) continue;
     buildTriangle(i, heights);
     touched.push_back(uint32_t(i));
   }
