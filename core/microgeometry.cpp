@@ -175,8 +175,10 @@ bool MicroCells::interior(int i, int j) const {
 }
 
 MicroVertex MicroCells::gridInterior(int i, int j, GridVertexCache& cache) const {
-  GridVertexCache::Entry& e = cache.slot(i, j);
-  if (e.i != i || e.j != j) {
+  const int k = GridVertexCache::slot(i, j);
+  GridVertexCache::Entry& e = cache.e[k];
+  if (!(cache.filled >> k & 1) || e.i != i || e.j != j) {
+    cache.filled |= uint64_t(1) << k;
     e.i = i, e.j = j;
     e.v = gridInterior(i, j);
   }

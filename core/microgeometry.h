@@ -71,13 +71,16 @@ struct EdgeInfo {
 // Grid points already computed by MicroCells::cell for one triangle (direct-mapped,
 // keyed by the sample index): neighbouring cells share corners, a march along a ray
 // visits neighbouring cells. Only for one MicroCells (one triangle) at a time.
+// Starts empty by clearing one word (`filled`, a bit per slot), not its 64 entries: a
+// cache is set up for every ray and triangle that reaches a cell.
 struct GridVertexCache {
   struct Entry {
-    int i = std::numeric_limits<int>::min(), j = 0;
+    int i, j;
     MicroVertex v;
   };
+  uint64_t filled = 0;
   Entry e[64];
-  Entry& slot(int i, int j) { return e[(i & 7) | ((j & 7) << 3)]; }
+  static int slot(int i, int j) { return (i & 7) | ((j & 7) << 3); }
 };
 
 // The micro-triangles of T cell by cell, without allocation. T and d must outlive it.

@@ -43,7 +43,10 @@ struct MicroHit {
 // Hit with t in [tmin, tmax]? (Degenerate triangles and rays in their plane miss.)
 inline bool intersectMicro(const WatertightRay& R, const vec3& p0, const vec3& p1, const vec3& p2, float tmin,
                            float tmax, MicroHit& h) {
-  const vec3 A = p0 - R.o, B = p1 - R.o, C = p2 - R.o;
+  // Plain arrays: glm's operator[] is a switch, two branches for every component read.
+  const float A[3] = {p0.x - R.o.x, p0.y - R.o.y, p0.z - R.o.z};
+  const float B[3] = {p1.x - R.o.x, p1.y - R.o.y, p1.z - R.o.z};
+  const float C[3] = {p2.x - R.o.x, p2.y - R.o.y, p2.z - R.o.z};
   const float Ax = A[R.kx] + R.Sx * A[R.kz], Ay = A[R.ky] + R.Sy * A[R.kz];
   const float Bx = B[R.kx] + R.Sx * B[R.kz], By = B[R.ky] + R.Sy * B[R.kz];
   const float Cx = C[R.kx] + R.Sx * C[R.kz], Cy = C[R.ky] + R.Sy * C[R.kz];
