@@ -108,7 +108,7 @@ MicroVertex MicroCells::gridInterior(int i, int j) const {
   return {T_.P(b.x, b.y) + (d_.scale * (raw + d_.bias)) * glm::normalize(N), uv};
 }
 
-MicroVertex MicroCells::world(const PV& v, GridVertexCache* cache) const {
+MicroVertex MicroCells::world(const PV& v, const bool* onEdgePossible, GridVertexCache* cache) const {
   switch (v.kind) {
     case Kind::TVertex: {
       const int k = v.a;
@@ -122,9 +122,11 @@ MicroVertex MicroCells::world(const PV& v, GridVertexCache* cache) const {
     }
     case Kind::Grid:
     default: {
-      // A grid point exactly on an edge of T is computed from that edge alone.
+      // A grid point exactly on an edge of T is computed from that edge alone. Only
+      // edges that may pass through the cell (onEdgePossible) are tested: for the others
+      // σ·orient is positive at every corner of the cell.
       for (int e = 0; e < 3; ++e)
-        if (orient(E_[e].SA, E_[e].SB, v.s) == 0.0) {
+        if (onEdgePossible[e] && orient(E_[e].SA, E_[e].SB, v.s) == 0.0) {
           const dvec2 ab = E_[e].SB - E_[e].SA;
           const double t = std::clamp(glm::dot(v.s - E_[e].SA, ab) / glm::dot(ab, ab), 0.0, 1.0);
           return onEdge(e, t, d_.raw(v.a, v.b, f_));
@@ -227,6 +229,8 @@ int MicroCells::clipped(int i, int j, MicroTriangle* out, GridVertexCache* cache
     clipAgainst[e] = !(least > margin);
   }
   int count = 0;
+  int diagEdge = -1;  // the edge whose crossing with the diagonal is diagVertex
+  MicroVertex diagVertex{};
   // A triangle clipped by three half-planes has at most 6 vertices.
   std::array<PV, 8> bufA, bufB;
   for (int half = 0; half < 2; ++half) {
@@ -256,7 +260,21 @@ int MicroCells::clipped(int i, int j, MicroTriangle* out, GridVertexCache* cache
     if (m < 3) continue;
     std::array<MicroVertex, 8> w;
     const int nv = std::min(m, int(w.size()));
-    for (int k = 0; k < nv; ++k) w[k] = world(tmp[k], cache);
+    for (int k = 0; k < nv; ++k) {
+      // The crossing of an edge of T with the cell's diagonal is a vertex of both
+      // halves: computed once (world() is a function of the edge and the line).
+      const PV& v = tmp[k];
+      if (v.kind == Kind::Cross && v.line.type == LineType::D) {
+        if (diagEdge == v.a) {
+          w[k] = diagVertex;
+          continue;
+        }
+        w[k] = world(v, clipAgainst, cache);
+        diagEdge = v.a, diagVertex = w[k];
+        continue;
+      }
+      w[k] = world(v, clipAgainst, cache);
+    }
     for (int k = 1; k + 1 < nv; ++k) out[count++] = MicroTriangle{{w[0], w[k], w[k + 1]}};
   }
   return count;

@@ -112,7 +112,7 @@ class MicroCells {
   double crossParam(int e, const micro::Line& L) const;
   MicroVertex onEdge(int e, double t, float rawHeight) const;
   float lineHeight(const micro::Line& L, const dvec2& s) const;
-  MicroVertex world(const micro::PV& v, GridVertexCache* cache) const;
+  MicroVertex world(const micro::PV& v, const bool* onEdgePossible, GridVertexCache* cache) const;
   MicroVertex gridInterior(int i, int j) const;
   MicroVertex gridInterior(int i, int j, GridVertexCache& cache) const;
   int clipped(int i, int j, MicroTriangle* out, GridVertexCache* cache) const;
