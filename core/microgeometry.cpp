@@ -201,13 +201,19 @@ int MicroCells::cell(int i, int j, MicroTriangle* out) const {
   return clipped(i, j, out, nullptr);
 }
 
+bool MicroCells::interiorCorners(int i, int j, GridVertexCache& cache, MicroVertex q[4]) const {
+  if (T_.uvArea2 == 0.0f || !interior(i, j)) return false;
+  q[0] = gridInterior(i, j, cache), q[1] = gridInterior(i + 1, j, cache);
+  q[2] = gridInterior(i + 1, j + 1, cache), q[3] = gridInterior(i, j + 1, cache);
+  return true;
+}
+
 int MicroCells::cell(int i, int j, MicroTriangle* out, GridVertexCache& cache) const {
   if (T_.uvArea2 == 0.0f) return 0;
-  if (interior(i, j)) {
-    const MicroVertex v00 = gridInterior(i, j, cache), v10 = gridInterior(i + 1, j, cache);
-    const MicroVertex v11 = gridInterior(i + 1, j + 1, cache), v01 = gridInterior(i, j + 1, cache);
-    out[0] = MicroTriangle{{v00, v10, v11}};
-    out[1] = MicroTriangle{{v00, v11, v01}};
+  MicroVertex q[4];
+  if (interiorCorners(i, j, cache, q)) {
+    out[0] = MicroTriangle{{q[0], q[1], q[2]}};
+    out[1] = MicroTriangle{{q[0], q[2], q[3]}};
     return 2;
   }
   return clipped(i, j, out, &cache);

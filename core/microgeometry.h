@@ -104,6 +104,14 @@ class MicroCells {
 
   // True when the cell's four corners lie strictly inside T (two unclipped triangles).
   bool interior(int i, int j) const;
+  // For such a cell, its corners q = (v00, v10, v11, v01) (cell() emits the triangles
+  // (v00, v10, v11) and (v00, v11, v01)), from `cache` where it has them; false for a
+  // cell that is not interior (clippedCell() then has its triangles).
+  bool interiorCorners(int i, int j, GridVertexCache& cache, MicroVertex q[4]) const;
+  // cell() for a cell interiorCorners() refused.
+  int clippedCell(int i, int j, MicroTriangle* out, GridVertexCache& cache) const {
+    return T_.uvArea2 == 0.0f ? 0 : clipped(i, j, out, &cache);
+  }
 
  private:
   bool inside(int e, const dvec2& p) const;

@@ -40,34 +40,45 @@ struct MicroHit {
   float b0, b1, b2;  // barycentrics of v[0], v[1], v[2]
 };
 
-// Hit with t in [tmin, tmax]? (Degenerate triangles and rays in their plane miss.)
-inline bool intersectMicro(const WatertightRay& R, const vec3& p0, const vec3& p1, const vec3& p2, float tmin,
-                           float tmax, MicroHit& h) {
+// A vertex in the ray's frame: permuted, translated to the origin and sheared in x and
+// y; z is the permuted, unscaled coordinate (scaled by Sz only where a hit is possible).
+struct ShearedVertex {
+  float x, y, z;
+};
+[[gnu::always_inline]] inline ShearedVertex shear(const WatertightRay& R, const vec3& p) {
   // Plain arrays: glm's operator[] is a switch, two branches for every component read.
-  const float A[3] = {p0.x - R.o.x, p0.y - R.o.y, p0.z - R.o.z};
-  const float B[3] = {p1.x - R.o.x, p1.y - R.o.y, p1.z - R.o.z};
-  const float C[3] = {p2.x - R.o.x, p2.y - R.o.y, p2.z - R.o.z};
-  const float Ax = A[R.kx] + R.Sx * A[R.kz], Ay = A[R.ky] + R.Sy * A[R.kz];
-  const float Bx = B[R.kx] + R.Sx * B[R.kz], By = B[R.ky] + R.Sy * B[R.kz];
-  const float Cx = C[R.kx] + R.Sx * C[R.kz], Cy = C[R.ky] + R.Sy * C[R.kz];
-  float U = Cx * By - Cy * Bx;
-  float V = Ax * Cy - Ay * Cx;
-  float W = Bx * Ay - By * Ax;
+  const float A[3] = {p.x - R.o.x, p.y - R.o.y, p.z - R.o.z};
+  return {A[R.kx] + R.Sx * A[R.kz], A[R.ky] + R.Sy * A[R.kz], A[R.kz]};
+}
+
+// The test on vertices already in the ray's frame (a vertex shared by two triangles is
+// transformed once, with the same float operations).
+[[gnu::always_inline]] inline bool intersectSheared(const WatertightRay& R, const ShearedVertex& a, const ShearedVertex& b,
+                             const ShearedVertex& c, float tmin, float tmax, MicroHit& h) {
+  float U = c.x * b.y - c.y * b.x;
+  float V = a.x * c.y - a.y * c.x;
+  float W = b.x * a.y - b.y * a.x;
   if (U == 0.0f || V == 0.0f || W == 0.0f) {  // on an edge in float: decide in double
-    U = float(double(Cx) * By - double(Cy) * Bx);
-    V = float(double(Ax) * Cy - double(Ay) * Cx);
-    W = float(double(Bx) * Ay - double(By) * Ax);
+    U = float(double(c.x) * b.y - double(c.y) * b.x);
+    V = float(double(a.x) * c.y - double(a.y) * c.x);
+    W = float(double(b.x) * a.y - double(b.y) * a.x);
   }
   if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return false;
   const float det = U + V + W;
   if (det == 0.0f) return false;
-  const float Az = R.Sz * A[R.kz], Bz = R.Sz * B[R.kz], Cz = R.Sz * C[R.kz];
+  const float Az = R.Sz * a.z, Bz = R.Sz * b.z, Cz = R.Sz * c.z;
   const float T = U * Az + V * Bz + W * Cz;
   const float inv = 1.0f / det;
   const float t = T * inv;
   if (!(t >= tmin && t <= tmax)) return false;
   h = {t, U * inv, V * inv, W * inv};
   return true;
+}
+
+// Hit with t in [tmin, tmax]? (Degenerate triangles and rays in their plane miss.)
+inline bool intersectMicro(const WatertightRay& R, const vec3& p0, const vec3& p1, const vec3& p2, float tmin,
+                           float tmax, MicroHit& h) {
+  return intersectSheared(R, shear(R, p0), shear(R, p1), shear(R, p2), tmin, tmax, h);
 }
 
 // Fills a TriangleHit-like result: uv interpolated, unit geometric normal
