@@ -105,7 +105,7 @@ class RayPatch final : public SplitContext {
   static constexpr int kStack = OBLONG_TRAV_STACK;
 
   RayPatch(const TraversalMesh& mesh, uint32_t prim, const RQ& rq, const Inv& inv, const TraversalOptions& opt,
-           const Ray& ray, RayCounters& counters)
+           const Ray& ray, const RayConstants& rc, RayCounters& counters)
       : tri_(mesh.tris[prim]),
         shell_(mesh.params[prim]),
         disp_(mesh.disp),
@@ -116,10 +116,10 @@ class RayPatch final : public SplitContext {
         counters_(counters),
         frame_(mesh.frames[prim]),
         blend_(mesh.disp.blendOf(ray.lod)),
-        watertightRay_(ray),
-        origin_(ray.o),
-        dir_(ray.d) {
-    invDir_ = 1.0 / dir_;
+        watertightRay_(rc.wt),
+        origin_(rc.o),
+        dir_(rc.d),
+        invDir_(rc.invD) {
     const CellRange& cr = mesh.cells[prim];
     cellLo_ = ivec2(cr.x0, cr.y0) - frame_.origin;
     cellHi_ = ivec2(cr.x1, cr.y1) - frame_.origin;
@@ -128,7 +128,7 @@ class RayPatch final : public SplitContext {
     uvBoxHi_ = s1 - dvec2(frame_.origin);
     // Rounding of the watertight test itself (RayMargins). Within the origin budget the
     // precomputed prism and boxes (padded for the budget) serve; beyond it, rebuilt.
-    const double maxO = std::max({std::abs(origin_.x), std::abs(origin_.y), std::abs(origin_.z)});
+    const double maxO = rc.maxO;
     const double budget = mesh.originBudget[prim];
     const bool pre = maxO <= budget;
     // This ray's own margins: the dilation ε and the pads of the boxes built per step
@@ -136,7 +136,7 @@ class RayPatch final : public SplitContext {
     const RayMargins m = RayMargins::make(shell_, maxAbsVertex(tri_), maxO);
     boxPad_ = m.boxPad;
     // Slack for comparing float hit distances with double interval ends.
-    tSlackAbs_ = OBLONG_TRAV_T_ABS_PADS * boxPad_ / glm::length(dir_);
+    tSlackAbs_ = OBLONG_TRAV_T_ABS_PADS * boxPad_ / rc.lenD;
     dilation_ = shell_.eps + shell_.kxy * (OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr);
     if (pre) {
       prism_ = &mesh.prisms[prim];
@@ -565,8 +565,7 @@ class RayPatch final : public SplitContext {
   const float blend_;        // the ray's level-of-detail blend (Displacement::blendOf)
   const WatertightRay watertightRay_;
   // The ray in double, and what it needs per triangle.
-  const dvec3 origin_, dir_;
-  dvec3 invDir_;
+  const dvec3 origin_, dir_, invDir_;
   ivec2 cellLo_, cellHi_;    // the triangle's cells, local sample coordinates
   dvec2 uvBoxLo_, uvBoxHi_;  // the triangle's uv box, local sample coordinates
   double boxPad_ = 0, tSlackAbs_ = 0;

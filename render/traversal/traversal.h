@@ -85,14 +85,15 @@ class Traversal final : public TraversalIntersectorBase {
     if (!mesh_.params[prim].valid) return false;
     RayCounters local;
     local.prisms = 1;
-    if (mesh_.missesPrism(prim, r)) {
+    const RayConstants& rc = rayConstants(r);
+    if (mesh_.missesPrism(prim, r, rc)) {
       flushCounters(local, false, c);
       return false;
     }
     const RQ& rq = static_cast<const RQ&>(*rq_);
     const Inv& inv = static_cast<const Inv&>(*inv_);
     const Split& split = static_cast<const Split&>(*split_);
-    RayPatch<RQ, Inv> patch(mesh_, prim, rq, inv, opt_, r, local);
+    RayPatch<RQ, Inv> patch(mesh_, prim, rq, inv, opt_, r, rc, local);
     const bool found = patch.run(split);
     if (found) patch.hit().fill(hit);
     flushCounters(local, found, c);

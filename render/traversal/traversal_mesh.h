@@ -6,14 +6,18 @@
 #include "core/microgeometry.h"
 #include "render/intersector.h"
 #include "render/traversal/constants.h"
+#include "render/traversal/microtri.h"
 #include "render/traversal/prism.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include "render/traversal/psi.h"
 
+#include <cstring>
 #include <limits>
+#include <new>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace oblong {
@@ -23,6 +27,36 @@ inline double maxAbsVertex(const DisplacedTriangle& T) {
   for (int k = 0; k < 3; ++k)
     m = std::max({m, std::abs(double(T.p[k].x)), std::abs(double(T.p[k].y)), std::abs(double(T.p[k].z))});
   return m;
+}
+
+// What the traversal derives from a ray alone (its origin and direction in the mesh's
+// frame): the same for every triangle the ray visits.
+struct RayConstants {
+  dvec3 o, d, invD;
+  double lenD, maxO;  // |d|, max-norm of o
+  WatertightRay wt;
+  explicit RayConstants(const Ray& r)
+      : o(r.o), d(r.d), invD(1.0 / d), lenD(glm::length(d)), maxO(std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z)})),
+        wt(r) {}
+};
+
+// The constants of the last ray seen on this thread. Embree calls the traversal once per
+// prism box a ray meets (2.3 times per camera ray on the asteroid), and the divisions and
+// the square root are the same each time. A pure function of the ray's origin and
+// direction bits, so the memo is right for any caller.
+inline const RayConstants& rayConstants(const Ray& r) {
+  // Plain storage: constant-initialised, no guard on each access.
+  alignas(RayConstants) thread_local unsigned char storage[sizeof(RayConstants)];
+  thread_local float key[6];
+  thread_local bool valid = false;
+  static_assert(std::is_trivially_destructible_v<RayConstants>);
+  const float k[6] = {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z};
+  if (!valid || std::memcmp(k, key, sizeof k) != 0) {
+    new (storage) RayConstants(r);
+    std::memcpy(key, k, sizeof k);
+    valid = true;
+  }
+  return *std::launder(reinterpret_cast<const RayConstants*>(storage));
 }
 
 // Margins for the watertight micro-triangle test's own rounding (a few ulps of |p − o|)
@@ -189,16 +223,14 @@ struct TraversalMesh {
   // A cheap exact reject before any per-ray set-up: true when [tmin, tmax] (with the
   // traversal's own slack) misses the padded boxes around the inflated prism. Only for
   // origins within the budget; beyond it, false (the full test decides).
-  bool missesPrism(uint32_t prim, const Ray& r) const {
-    const dvec3 O(r.o), D(r.d);
-    const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
-    if (!(maxO <= originBudget[prim])) return false;
-    const double tAbs = OBLONG_TRAV_T_ABS_PADS * budgetPad[prim] / glm::length(D);
+  bool missesPrism(uint32_t prim, const Ray& r, const RayConstants& rc) const {
+    if (!(rc.maxO <= originBudget[prim])) return false;
+    const double tAbs = OBLONG_TRAV_T_ABS_PADS * budgetPad[prim] / rc.lenD;
     double t0 = r.tmin - (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmin)) + tAbs);
     double t1 = r.tmax + (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmax)) + tAbs);
-    inflatedBoxes[prim].clip(O, 1.0 / D, t0, t1);
+    inflatedBoxes[prim].clip(rc.o, rc.invD, t0, t1);
     if (!(t0 <= t1)) return true;
-    if (obbs[prim].valid()) obbs[prim].clip(O, D, OBLONG_TRAV_OBB_ROUND * (maxO + 1), t0, t1);
+    if (obbs[prim].valid()) obbs[prim].clip(rc.o, rc.d, OBLONG_TRAV_OBB_ROUND * (rc.maxO + 1), t0, t1);
     return !(t0 <= t1);
   }
 };
