@@ -53,8 +53,9 @@ struct ShearedVertex {
 
 // The test on vertices already in the ray's frame (a vertex shared by two triangles is
 // transformed once, with the same float operations).
-[[gnu::always_inline]] inline bool intersectSheared(const WatertightRay& R, const ShearedVertex& a, const ShearedVertex& b,
-                             const ShearedVertex& c, float tmin, float tmax, MicroHit& h) {
+[[gnu::always_inline]] inline bool intersectSheared(const WatertightRay& R, const ShearedVertex& a,
+                                                    const ShearedVertex& b, const ShearedVertex& c, float tmin,
+                                                    float tmax, MicroHit& h) {
   float U = c.x * b.y - c.y * b.x;
   float V = a.x * c.y - a.y * c.x;
   float W = b.x * a.y - b.y * a.x;

@@ -36,7 +36,11 @@ struct RayConstants {
   double lenD, maxO;  // |d|, max-norm of o
   WatertightRay wt;
   explicit RayConstants(const Ray& r)
-      : o(r.o), d(r.d), invD(1.0 / d), lenD(glm::length(d)), maxO(std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z)})),
+      : o(r.o),
+        d(r.d),
+        invD(1.0 / d),
+        lenD(glm::length(d)),
+        maxO(std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z)})),
         wt(r) {}
 };
 
