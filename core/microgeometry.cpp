@@ -176,7 +176,7 @@ bool MicroCells::interior(int i, int j) const {
   return true;
 }
 
-MicroVertex MicroCells::gridInterior(int i, int j, GridVertexCache& cache) const {
+const MicroVertex& MicroCells::gridInterior(int i, int j, GridVertexCache& cache) const {
   const int k = GridVertexCache::slot(i, j);
   GridVertexCache::Entry& e = cache.e[k];
   if (!(cache.filled >> k & 1) || e.i != i || e.j != j) {
@@ -201,19 +201,19 @@ int MicroCells::cell(int i, int j, MicroTriangle* out) const {
   return clipped(i, j, out, nullptr);
 }
 
-bool MicroCells::interiorCorners(int i, int j, GridVertexCache& cache, MicroVertex q[4]) const {
+bool MicroCells::interiorCorners(int i, int j, GridVertexCache& cache, const MicroVertex* q[4]) const {
   if (T_.uvArea2 == 0.0f || !interior(i, j)) return false;
-  q[0] = gridInterior(i, j, cache), q[1] = gridInterior(i + 1, j, cache);
-  q[2] = gridInterior(i + 1, j + 1, cache), q[3] = gridInterior(i, j + 1, cache);
+  q[0] = &gridInterior(i, j, cache), q[1] = &gridInterior(i + 1, j, cache);
+  q[2] = &gridInterior(i + 1, j + 1, cache), q[3] = &gridInterior(i, j + 1, cache);
   return true;
 }
 
 int MicroCells::cell(int i, int j, MicroTriangle* out, GridVertexCache& cache) const {
   if (T_.uvArea2 == 0.0f) return 0;
-  MicroVertex q[4];
+  const MicroVertex* q[4];
   if (interiorCorners(i, j, cache, q)) {
-    out[0] = MicroTriangle{{q[0], q[1], q[2]}};
-    out[1] = MicroTriangle{{q[0], q[2], q[3]}};
+    out[0] = MicroTriangle{{*q[0], *q[1], *q[2]}};
+    out[1] = MicroTriangle{{*q[0], *q[2], *q[3]}};
     return 2;
   }
   return clipped(i, j, out, &cache);

@@ -105,9 +105,10 @@ class MicroCells {
   // True when the cell's four corners lie strictly inside T (two unclipped triangles).
   bool interior(int i, int j) const;
   // For such a cell, its corners q = (v00, v10, v11, v01) (cell() emits the triangles
-  // (v00, v10, v11) and (v00, v11, v01)), from `cache` where it has them; false for a
-  // cell that is not interior (clippedCell() then has its triangles).
-  bool interiorCorners(int i, int j, GridVertexCache& cache, MicroVertex q[4]) const;
+  // (v00, v10, v11) and (v00, v11, v01)): pointers into `cache`, valid until its next
+  // use (the four corners of a cell take four different slots); false for a cell that
+  // is not interior (clippedCell() then has its triangles).
+  bool interiorCorners(int i, int j, GridVertexCache& cache, const MicroVertex* q[4]) const;
   // cell() for a cell interiorCorners() refused.
   int clippedCell(int i, int j, MicroTriangle* out, GridVertexCache& cache) const {
     return T_.uvArea2 == 0.0f ? 0 : clipped(i, j, out, &cache);
@@ -122,7 +123,7 @@ class MicroCells {
   float lineHeight(const micro::Line& L, const dvec2& s) const;
   MicroVertex world(const micro::PV& v, const bool* onEdgePossible, GridVertexCache* cache) const;
   MicroVertex gridInterior(int i, int j) const;
-  MicroVertex gridInterior(int i, int j, GridVertexCache& cache) const;
+  const MicroVertex& gridInterior(int i, int j, GridVertexCache& cache) const;
   int clipped(int i, int j, MicroTriangle* out, GridVertexCache* cache) const;
   int clip(int e, const micro::PV* in, int n, micro::PV* out) const;
 

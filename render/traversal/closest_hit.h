@@ -27,14 +27,14 @@ struct ClosestHit {
   // The two micro-triangles of a cell inside T, corners q = (v00, v10, v11, v01):
   // (v00, v10, v11) then (v00, v11, v01), as MicroCells::cell emits them. The same as
   // test() on each, with the four corners transformed once.
-  void testCell(const WatertightRay& R, const MicroVertex q[4], float tmin, float tmax) {
-    const ShearedVertex s00 = shear(R, q[0].p), s10 = shear(R, q[1].p), s11 = shear(R, q[2].p),
-                        s01 = shear(R, q[3].p);
+  void testCell(const WatertightRay& R, const MicroVertex* const q[4], float tmin, float tmax) {
+    const ShearedVertex s00 = shear(R, q[0]->p), s10 = shear(R, q[1]->p), s11 = shear(R, q[2]->p),
+                        s01 = shear(R, q[3]->p);
     MicroHit mh;
     if (intersectSheared(R, s00, s10, s11, tmin, std::min(tmax, t), mh) && (!found || mh.t < t))
-      t = mh.t, found = true, tri = MicroTriangle{{q[0], q[1], q[2]}}, h = mh;
+      t = mh.t, found = true, tri = MicroTriangle{{*q[0], *q[1], *q[2]}}, h = mh;
     if (intersectSheared(R, s00, s11, s01, tmin, std::min(tmax, t), mh) && (!found || mh.t < t))
-      t = mh.t, found = true, tri = MicroTriangle{{q[0], q[2], q[3]}}, h = mh;
+      t = mh.t, found = true, tri = MicroTriangle{{*q[0], *q[2], *q[3]}}, h = mh;
   }
   void fill(TriangleHit& hit) const {
     hit.t = t;

@@ -343,7 +343,7 @@ class RayPatch final : public SplitContext {
       cellsReady_ = true;
     }
     const int I = i + frame_.origin.x, J = j + frame_.origin.y;
-    MicroVertex q[4];
+    const MicroVertex* q[4];
     if (cells().interiorCorners(I, J, cache(), q)) {  // most cells: two triangles, no copies
       counters_.microTriangles += 2;
       hit_.testCell(watertightRay_, q, ray_.tmin, ray_.tmax);
