@@ -85,8 +85,12 @@
 #define OBLONG_TRAV_PAD_DOMINANCE 0.25
 
 // processPiece, inversion during traversal: a clipped end is inverted only when the box
-// clip moved it by more than this fraction of the piece's ray interval (minGain).
+// clip moved it by more than this fraction of the piece's ray interval (minGain), and by
+// more than the ray interval in which the piece crosses this many cells along its
+// rectangle's longer side: a smaller move cannot take a cell off the rectangle often
+// enough to pay for the inversion.
 #define OBLONG_TRAV_MIN_GAIN 1e-3
+#define OBLONG_TRAV_MIN_GAIN_CELLS 0.5
 
 // processBox: cell ranges of at most max(this, marching scale) cells per axis are tested
 // cell by cell instead of split.

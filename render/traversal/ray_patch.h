@@ -488,7 +488,8 @@ class RayPatch final : public SplitContext {
     if (!clipToCells(clo, chi, t0, t1)) return;
     if (opt_.inversionInTraversal) {
       // Fig. 5a: the clipped ends' projections can give a much smaller rectangle.
-      const double minGain = OBLONG_TRAV_MIN_GAIN * (p.b.t - p.a.t);
+      const double dt = p.b.t - p.a.t;
+      const double minGain = std::max(OBLONG_TRAV_MIN_GAIN * dt, OBLONG_TRAV_MIN_GAIN_CELLS * dt / std::max(ext.x, ext.y));
       CurvePoint m;
       if (t0 > p.a.t + minGain && invertAt(t0, m)) p.a = m;
       if (t1 < p.b.t - minGain && invertAt(t1, m)) p.b = m;

@@ -978,7 +978,9 @@ void processPiece(CurvePoint a, CurvePoint b) {
   // during traversal, their projections can give a much smaller rectangle), then the
   // midpoint2d split — the crossing with the middle of the longer side, else of the
   // other side (split::middleCrossing), else the t-midpoint by inversion.
-  precise double minGain = OBLONG_TRAV_MIN_GAIN * (b.t - a.t);
+  precise dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
+  precise double gainDt = b.t - a.t;
+  precise double minGain = max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
   CurvePoint m;
   bool ok = false;
   for (int e = g_mesh.inversionInTraversal != 0 ? 0 : 2; e < 3; ++e) {
