@@ -300,6 +300,26 @@ class RayPatch final : public SplitContext {
     return true;
   }
 
+  // The curve point at t taken from the closest hit instead of an inversion: the hit's
+  // texture position gives T's barycentrics b, and s is the least-squares height of
+  // X(t) on b's displacement line. makePoint's residual bounds the error for any claimed
+  // (b, s), so the point is as safe as an inverted one; its pad is larger by the
+  // micro-triangle's bulge and the move from the hit to t (both well under ε).
+  bool pointFromHit(double t, CurvePoint& out) const {
+    if (!hit_.found) return false;
+    const MicroTriangle& m = hit_.tri;
+    const MicroHit& h = hit_.h;
+    const dvec2 uv = double(h.b0) * dvec2(m.v[0].uv) + double(h.b1) * dvec2(m.v[1].uv) +
+                     double(h.b2) * dvec2(m.v[2].uv);
+    const dvec2 sample(uv.x * double(disp_.tiling.x) * disp_.map->width() - disp_.sampleOffset,
+                       uv.y * double(disp_.tiling.y) * disp_.map->height() - disp_.sampleOffset);
+    const dvec2 b = frame_.bary(sample - dvec2(frame_.origin));
+    const dvec3 X = origin_ + t * dir_;
+    const dvec3 N = frame_.N(b);
+    const double s = glm::dot(X - frame_.P(b), N) / glm::dot(N, N);
+    return makePoint(t, b, s, out);
+  }
+
   dvec2 dirLocal() const { return approxDirLocal(frame_, dir_); }
 
   // Local cells touching [lo, hi], clipped to T's cells. False when empty.
@@ -431,7 +451,7 @@ class RayPatch final : public SplitContext {
       const double tStar = bestLimit();
       if (tStar <= p.a.t) return false;
       CurvePoint m;
-      if (tStar < p.b.t && invertAt(tStar, m))
+      if (tStar < p.b.t && (pointFromHit(tStar, m) || invertAt(tStar, m)))
         for (int a = 0; a < 2; ++a)
           if (certain[a]) {
             const double margin = m.pad[a] + p.a.pad[a] + p.b.pad[a];

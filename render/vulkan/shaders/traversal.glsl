@@ -843,13 +843,30 @@ void startMarch(CurvePoint a, CurvePoint b) {
   g_mStop = dvec2(0.0);
 }
 
+// RayPatch::pointFromHit: the curve point at t from the closest hit (its texture
+// position, the least-squares s of X(t)), validated by makePoint like any other.
+bool pointFromHit(double t, out CurvePoint outp) {
+  outp = CurvePoint(t, dvec2(0.0), dvec2(0.0));
+  if (!g_found) return false;
+  precise dvec2 uv = double(g_hb.x) * dvec2(g_hv0.uv) + double(g_hb.y) * dvec2(g_hv1.uv) +
+                     double(g_hb.z) * dvec2(g_hv2.uv);
+  precise dvec2 smp = dvec2(uv.x * double(g_mesh.tiling.x) * double(g_mesh.W) - double(g_mesh.sampleOffset),
+                            uv.y * double(g_mesh.tiling.y) * double(g_mesh.H) - double(g_mesh.sampleOffset));
+  precise dvec2 loc = smp - dvec2(TRI.origin);
+  dvec2 b = frameBary(loc);
+  precise dvec3 X = g_O + t * g_D;
+  dvec3 N = frameN(b);
+  precise double s = dotD(X - frameP(b), N) / dotD(N, N);
+  return makePoint(t, b, s, outp);
+}
+
 // False when no cell of the marched piece can hold a better hit (RayPatch::march).
 bool setStop() {
   g_mStopSet = true;
   double tStar = bestLimit();
   if (tStar <= g_ma.t) return false;
   CurvePoint m;
-  if (tStar < g_mb.t && invertAt(tStar, m))
+  if (tStar < g_mb.t && (pointFromHit(tStar, m) || invertAt(tStar, m)))
     for (int k = 0; k < 2; ++k)
       if (g_mCertain[k]) {
         precise double margin = m.pad[k] + g_ma.pad[k] + g_mb.pad[k];
