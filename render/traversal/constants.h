@@ -92,6 +92,10 @@
 #define OBLONG_TRAV_MIN_GAIN 1e-3
 #define OBLONG_TRAV_MIN_GAIN_CELLS 0.5
 
+// Curve points claimed without an inversion (RayPatch::pointBetween) are kept only when
+// their pad (texels, both axes together) is at most this; else the point is inverted.
+#define OBLONG_TRAV_CLAIM_PAD 0.05
+
 // processBox: cell ranges of at most max(this, marching scale) cells per axis are tested
 // cell by cell instead of split.
 #define OBLONG_TRAV_MIN_BOX_CELLS 1

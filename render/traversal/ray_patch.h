@@ -4,14 +4,15 @@
 // Per ray and displaced triangle (docs/traversal.md has the reasoning):
 //   1. Clip the ray to the triangle's inflated prism (prism.h); its crossings give the
 //      interval [tIn, tOut] and the uv of its ends; a ray starting (or ending) inside
-//      gets its end's uv by inversion.
+//      gets its end's uv from a point claimed between the crossings (pointBetween), else
+//      by inversion.
 //   2. Split [tIn, tOut] where the curve may turn (psi.h): monotone pieces.
 //   3. Fixed-size stack of pieces, front to back. A piece whose rectangle is at most
 //      `marchingScale` texels is marched (below); otherwise its rectangle, dilated by ε
 //      and snapped outward to whole cells, is bounded (RangeQuery + interval arithmetic,
 //      rect_bounds.h), the ray is clipped to that box, the piece is optionally tightened
-//      by inverting the clipped ends (Fig. 12 "inversion during traversal"), and the
-//      splitter cuts it in two.
+//      by re-projecting the clipped ends (Fig. 5a, "inversion during traversal"; claimed,
+//      else inverted), and the splitter cuts it in two.
 //   4. Texel marching (§4.4): the cells within ε of the monotone piece, column by column
 //      along its major axis, front to back; ψ's crossing with each column's sides gives
 //      the rows to test. Each cell's micro-triangles come from core/microgeometry's
@@ -202,9 +203,12 @@ class RayPatch final : public SplitContext {
     const double tIn = std::max(first.t, double(ray_.tmin) - slack(ray_.tmin));
     const double tOut = std::min(last.t, double(ray_.tmax) + slack(ray_.tmax));
     if (!(tIn <= tOut)) return false;
-    CurvePoint A, B;
-    const bool okA = tIn == first.t ? makePoint(first.t, first.bary, first.s, A) : invertAt(tIn, A);
-    const bool okB = tOut == last.t ? makePoint(last.t, last.bary, last.s, B) : invertAt(tOut, B);
+    // A ray that starts (or ends) inside the prism: that end's point from the crossings'
+    // points, else by inversion.
+    CurvePoint F, L, A, B;
+    const bool okF = makePoint(first.t, first.bary, first.s, F), okL = makePoint(last.t, last.bary, last.s, L);
+    const bool okA = tIn == first.t ? (A = F, okF) : (okF && okL && pointBetween(F, L, tIn, A)) || invertAt(tIn, A);
+    const bool okB = tOut == last.t ? (B = L, okL) : (okF && okL && pointBetween(F, L, tOut, B)) || invertAt(tOut, B);
     if (!okA || !okB) return runBoxOnly();
     psi_ = Psi::make(frame_, origin_, dir_);
     dirLocal_ = dirLocal();
@@ -318,6 +322,27 @@ class RayPatch final : public SplitContext {
     const dvec3 N = frame_.N(b);
     const double s = glm::dot(X - frame_.P(b), N) / glm::dot(N, N);
     return makePoint(t, b, s, out);
+  }
+
+  // The curve point at t, between curve points a and b, without an inversion: uv
+  // interpolated linearly in t (exact where T's normals are parallel), s by least
+  // squares, one Newton step on G(b, s) = X(t) in double; makePoint's residual bound
+  // holds for any claimed (b, s). Refused when its pad exceeds OBLONG_TRAV_CLAIM_PAD.
+  bool pointBetween(const CurvePoint& a, const CurvePoint& b, double t, CurvePoint& out) const {
+    const double tau = (t - a.t) / (b.t - a.t);
+    dvec2 bc = frame_.bary(a.uv + tau * (b.uv - a.uv));
+    const dvec3 X = origin_ + t * dir_;
+    const dvec3 N = frame_.N(bc);
+    double s = glm::dot(X - frame_.P(bc), N) / glm::dot(N, N);
+    // J = [∂G/∂u, ∂G/∂v, N] (G is bilinear in (b, s)), solved by Cramer's rule.
+    const dvec3 r = X - frame_.G(bc, s);
+    const dvec3 Gu = frame_.e1 + s * frame_.f1, Gv = frame_.e2 + s * frame_.f2;
+    const dvec3 c0 = glm::cross(Gv, N), c1 = glm::cross(N, Gu), c2 = glm::cross(Gu, Gv);
+    const double det = glm::dot(Gu, c0);
+    if (!(std::abs(det) > 0)) return false;
+    bc += dvec2(glm::dot(r, c0), glm::dot(r, c1)) / det;
+    s += glm::dot(r, c2) / det;
+    return makePoint(t, bc, s, out) && out.pad.x + out.pad.y <= OBLONG_TRAV_CLAIM_PAD;
   }
 
   dvec2 dirLocal() const { return approxDirLocal(frame_, dir_); }
@@ -511,8 +536,8 @@ class RayPatch final : public SplitContext {
       const double dt = p.b.t - p.a.t;
       const double minGain = std::max(OBLONG_TRAV_MIN_GAIN * dt, OBLONG_TRAV_MIN_GAIN_CELLS * dt / std::max(ext.x, ext.y));
       CurvePoint m;
-      if (t0 > p.a.t + minGain && invertAt(t0, m)) p.a = m;
-      if (t1 < p.b.t - minGain && invertAt(t1, m)) p.b = m;
+      if (t0 > p.a.t + minGain && (pointBetween(p.a, p.b, t0, m) || invertAt(t0, m))) p.a = m;
+      if (t1 < p.b.t - minGain && (pointBetween(p.a, p.b, t1, m) || invertAt(t1, m))) p.b = m;
       ext = p.hi() - p.lo();
       if (small()) return march(p);
     }

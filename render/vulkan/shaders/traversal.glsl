@@ -843,6 +843,28 @@ void startMarch(CurvePoint a, CurvePoint b) {
   g_mStop = dvec2(0.0);
 }
 
+// RayPatch::pointBetween: the curve point at t between curve points a and b without an
+// inversion (linear guess, least-squares s, one Newton step in double), validated by
+// makePoint; refused when its pad exceeds OBLONG_TRAV_CLAIM_PAD.
+bool pointBetween(CurvePoint a, CurvePoint b, double t, out CurvePoint outp) {
+  outp = CurvePoint(t, dvec2(0.0), dvec2(0.0));
+  precise double tau = (t - a.t) / (b.t - a.t);
+  precise dvec2 g = a.uv + tau * (b.uv - a.uv);
+  dvec2 bc = frameBary(g);
+  precise dvec3 X = g_O + t * g_D;
+  dvec3 N = frameN(bc);
+  precise double s = dotD(X - frameP(bc), N) / dotD(N, N);
+  precise dvec3 r = X - (frameP(bc) + s * frameN(bc));
+  precise dvec3 Gu = TRI.e1 + s * TRI.f1, Gv = TRI.e2 + s * TRI.f2;
+  dvec3 c0 = crossD(Gv, N), c1 = crossD(N, Gu), c2 = crossD(Gu, Gv);
+  double det = dotD(Gu, c0);
+  if (!(abs(det) > 0.0)) return false;
+  precise dvec2 nb = bc + dvec2(dotD(r, c0), dotD(r, c1)) / det;
+  precise double ns = s + dotD(r, c2) / det;
+  if (!makePoint(t, nb, ns, outp)) return false;
+  return outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD;
+}
+
 // RayPatch::pointFromHit: the curve point at t from the closest hit (its texture
 // position, the least-squares s of X(t)), validated by makePoint like any other.
 bool pointFromHit(double t, out CurvePoint outp) {
@@ -1024,7 +1046,7 @@ void processPiece(CurvePoint a, CurvePoint b) {
       t = 0.5 * (a.t + b.t);
     }
     CurvePoint q;
-    if (need && invertAt(t, q)) {
+    if (need && ((e < 2 && pointBetween(a, b, t, q)) || invertAt(t, q))) {
       if (e == 0) a = q;
       else if (e == 1) b = q;
       else {
@@ -1127,18 +1149,24 @@ int setupCurve() {
   g_dvd = dirLocal();
   double ts[4];
   int ns = monotoneSplits(tIn, tOut, ts);
-  // Curve points: the two ends (prism crossings, or inverted where the ray starts or
-  // ends inside), then the turning points; one call site each for makePoint/invertAt.
+  // Curve points: the two ends (prism crossings; where the ray starts or ends inside,
+  // claimed between the crossings' points or inverted), then the turning points.
   CurvePoint pts[6];
   bool okEnds = true;
+  CurvePoint F, L;
+  bool okF = makePoint(first.t, first.bary, first.s, F), okL = makePoint(last.t, last.bary, last.s, L);
   for (int k = 0; k < ns + 2; ++k) {
     if (k == 2 && !okEnds) return 1;
     Crossing c = k == 0 ? first : last;
     double t = k == 0 ? tIn : (k == 1 ? tOut : ts[k - 2]);
     bool ok;
     CurvePoint p;
-    if (k < 2 && t == c.t) ok = makePoint(c.t, c.bary, c.s, p);
-    else ok = invertAt(t, p);
+    if (k < 2 && t == c.t) {
+      p = k == 0 ? F : L;
+      ok = k == 0 ? okF : okL;
+    } else {
+      ok = (k < 2 && okF && okL && pointBetween(F, L, t, p)) || invertAt(t, p);
+    }
     if (!ok && k >= 2) return 1;
     okEnds = okEnds && ok;
     pts[k == 0 ? 0 : (k == 1 ? ns + 1 : k - 1)] = p;
