@@ -534,7 +534,8 @@ class RayPatch final : public SplitContext {
     if (opt_.inversionInTraversal) {
       // Fig. 5a: the clipped ends' projections can give a much smaller rectangle.
       const double dt = p.b.t - p.a.t;
-      const double minGain = std::max(OBLONG_TRAV_MIN_GAIN * dt, OBLONG_TRAV_MIN_GAIN_CELLS * dt / std::max(ext.x, ext.y));
+      const double minGain =
+          std::max(OBLONG_TRAV_MIN_GAIN * dt, OBLONG_TRAV_MIN_GAIN_CELLS * dt / std::max(ext.x, ext.y));
       CurvePoint m;
       if (t0 > p.a.t + minGain && (pointBetween(p.a, p.b, t0, m) || invertAt(t0, m))) p.a = m;
       if (t1 < p.b.t - minGain && (pointBetween(p.a, p.b, t1, m) || invertAt(t1, m))) p.b = m;

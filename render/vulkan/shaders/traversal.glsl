@@ -1019,7 +1019,8 @@ void processPiece(CurvePoint a, CurvePoint b) {
   // other side (split::middleCrossing), else the t-midpoint by inversion.
   precise dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
   precise double gainDt = b.t - a.t;
-  precise double minGain = max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
+  precise double minGain =
+      max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
   CurvePoint m;
   bool ok = false;
   for (int e = g_mesh.inversionInTraversal != 0 ? 0 : 2; e < 3; ++e) {
