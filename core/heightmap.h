@@ -81,9 +81,10 @@ struct Displacement {
 
   // Continuous sample coordinates of a uv: at level 0 the texel centre of texel (i, j)
   // is (i, j).
-  dvec2 toSample(const vec2& uv) const {
-    return {double(uv.x) * double(tiling.x) * map->width() - sampleOffset,
-            double(uv.y) * double(tiling.y) * map->height() - sampleOffset};
+  dvec2 toSample(const vec2& uv) const { return toSample(dvec2(uv)); }
+  dvec2 toSample(const dvec2& uv) const {
+    return {uv.x * double(tiling.x) * map->width() - sampleOffset,
+            uv.y * double(tiling.y) * map->height() - sampleOffset};
   }
   // uv of the sample point (i, j) (inverse of toSample).
   vec2 sampleToUV(double i, double j) const {

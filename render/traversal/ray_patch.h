@@ -315,9 +315,7 @@ class RayPatch final : public SplitContext {
     const MicroHit& h = hit_.h;
     const dvec2 uv = double(h.b0) * dvec2(m.v[0].uv) + double(h.b1) * dvec2(m.v[1].uv) +
                      double(h.b2) * dvec2(m.v[2].uv);
-    const dvec2 sample(uv.x * double(disp_.tiling.x) * disp_.map->width() - disp_.sampleOffset,
-                       uv.y * double(disp_.tiling.y) * disp_.map->height() - disp_.sampleOffset);
-    const dvec2 b = frame_.bary(sample - dvec2(frame_.origin));
+    const dvec2 b = frame_.bary(disp_.toSample(uv) - dvec2(frame_.origin));
     const dvec3 X = origin_ + t * dir_;
     const dvec3 N = frame_.N(b);
     const double s = glm::dot(X - frame_.P(b), N) / glm::dot(N, N);

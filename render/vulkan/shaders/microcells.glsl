@@ -54,6 +54,12 @@ vec2 sampleToUV(int i, int j) {
   precise double y = (double(j) + double(g_mesh.sampleOffset)) / (double(g_mesh.H) * double(g_mesh.tiling.y));
   return vec2(float(x), float(y));
 }
+// Displacement::toSample
+dvec2 toSample(dvec2 uv) {
+  precise dvec2 r = dvec2(uv.x * double(g_mesh.tiling.x) * double(g_mesh.W) - double(g_mesh.sampleOffset),
+                          uv.y * double(g_mesh.tiling.y) * double(g_mesh.H) - double(g_mesh.sampleOffset));
+  return r;
+}
 // Displacement::microAtSample
 float microAtSample(dvec2 s) {
   precise double fi = floor(s.x), fj = floor(s.y);

@@ -872,9 +872,7 @@ bool pointFromHit(double t, out CurvePoint outp) {
   if (!g_found) return false;
   precise dvec2 uv = double(g_hb.x) * dvec2(g_hv0.uv) + double(g_hb.y) * dvec2(g_hv1.uv) +
                      double(g_hb.z) * dvec2(g_hv2.uv);
-  precise dvec2 smp = dvec2(uv.x * double(g_mesh.tiling.x) * double(g_mesh.W) - double(g_mesh.sampleOffset),
-                            uv.y * double(g_mesh.tiling.y) * double(g_mesh.H) - double(g_mesh.sampleOffset));
-  precise dvec2 loc = smp - dvec2(TRI.origin);
+  precise dvec2 loc = toSample(uv) - dvec2(TRI.origin);
   dvec2 b = frameBary(loc);
   precise dvec3 X = g_O + t * g_D;
   dvec3 N = frameN(b);
