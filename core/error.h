@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -19,6 +20,19 @@ class Error : public std::runtime_error {
 template <typename... Args>
 [[noreturn]] void fail(const std::string& where, fmt::format_string<Args...> f, Args&&... args) {
   throw Error(where + ": " + fmt::format(f, std::forward<Args>(args)...));
+}
+
+// Prints a message on stderr and never throws: fmt::print throws when the write fails
+// (stderr closed or full), and a message must never end the process or lose a result.
+template <typename... Args>
+void eprint(fmt::format_string<Args...> f, Args&&... args) noexcept {
+  try {
+    const std::string s = fmt::format(f, std::forward<Args>(args)...);
+    std::fwrite(s.data(), 1, s.size(), stderr);
+    std::fflush(stderr);
+    std::clearerr(stderr);
+  } catch (...) {
+  }
 }
 
 }  // namespace oblong

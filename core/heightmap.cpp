@@ -1,6 +1,7 @@
 #include "core/heightmap.h"
 
 #include "core/error.h"
+#include "core/input_file.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -128,11 +129,8 @@ void checkPixelsFit(const std::string& path, OIIO::ImageInput& in, const OIIO::I
 }  // namespace
 
 HeightMap HeightMap::load(const std::string& path, bool flipV) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
   // Checked first: OpenImageIO would block on a FIFO or read a device forever.
-  if (!fs::exists(path, ec)) fail(path, "file not found");
-  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+  checkInputFile(path);
   StderrCapture capture;
   // Unassociated: OpenImageIO would otherwise multiply the first channel of a grey+alpha
   // PNG (or TIFF) by its alpha, and the heights with it.
@@ -164,7 +162,7 @@ HeightMap HeightMap::load(const std::string& path, bool flipV) {
   in->close();
   // A library's own complaint about a file that did load: one warning line.
   if (const std::string said = oneLine(capture.release()); !said.empty())
-    fmt::print(stderr, "oblong: warning: {}: {}\n", path, said);
+    eprint("oblong: warning: {}: {}\n", path, said);
   if (flipV) {
     for (int j = 0; j < spec.height / 2; ++j)
       std::swap_ranges(texels.begin() + size_t(j) * spec.width,

@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include "core/error.h"
+#include "core/input_file.h"
 #include "core/ply_check.h"
 
 #include <assimp/Importer.hpp>
@@ -283,7 +284,7 @@ void finishMesh(Mesh& m, const MeshLoadOptions& opts) {
              f[c], p.x, p.y, p.z, opts.transform != glm::mat4(1.0f) ? " after the transform" : "", kMaxCoordinate);
     }
   if (skipped > 0 && opts.warn)
-    fmt::print(stderr, "oblong: warning: {}: skipped {} of {} triangles as degenerate ({}; first: triangle {})\n",
+    eprint("oblong: warning: {}: skipped {} of {} triangles as degenerate ({}; first: triangle {})\n",
                m.name, skipped, total, detail, first);
   recentreMesh(m);
 }
@@ -308,10 +309,7 @@ void recentreMesh(Mesh& m) {
 }
 
 Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "file not found");
-  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+  checkInputFile(path);
 
   Assimp::Importer importer;
   const PlyCheck ply = checkPly(path, importer);

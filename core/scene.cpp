@@ -4,6 +4,7 @@
 #include "core/scene.h"
 
 #include "core/error.h"
+#include "core/input_file.h"
 #include "core/lod.h"
 #include "core/procedural.h"
 
@@ -575,9 +576,7 @@ Scene parseScene(const json& j, const std::string& path) {
 
 Scene loadScene(const std::string& path) {
   try {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) fail(path, "file not found");
-    if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+    checkInputFile(path);
     std::ifstream in(path);
     if (!in) fail(path, "cannot open file");
     json j;

@@ -44,7 +44,11 @@
 #include <bit>
 #include <charconv>
 #include <chrono>
+#include <cerrno>
 #include <csignal>
+#include <cstring>
+#include <system_error>
+#include <limits>
 #include <optional>
 #include <regex>
 
@@ -53,6 +57,20 @@ using namespace oblong;
 namespace {
 
 Scene sceneFrom(const std::string& path) { return path.empty() ? defaultScene() : loadScene(path); }
+
+// The files a loaded scene was read from (scene, meshes, maps), as (what, path) pairs
+// for checkNotInputs; the procedural ones ("<...>") have no file.
+std::vector<std::pair<std::string, std::string>> sceneInputs(const std::string& scenePath, const Scene& scene) {
+  std::vector<std::pair<std::string, std::string>> in;
+  if (!scenePath.empty()) in.emplace_back("scene", scenePath);
+  for (const SceneMesh& sm : scene.meshes) {
+    if (!sm.mesh.name.empty() && sm.mesh.name[0] != '<') in.emplace_back("mesh", sm.mesh.name);
+    if (!sm.displacement) continue;
+    for (const HeightMap* m : {sm.displacement->map.get(), sm.displacement->level0.get()})
+      if (m && !m->name().empty() && m->name()[0] != '<') in.emplace_back("displacement map", m->name());
+  }
+  return in;
+}
 
 // --device of render and trace: "cpu" (Embree) or "vulkan" (render/vulkan/commands.h).
 std::string deviceFlag = "cpu";
@@ -108,9 +126,11 @@ std::string human(size_t bytes) {
 }
 
 // Strategy flags shared by render and trace; unset flags keep the scene's choice.
+constexpr double kMaxFloat = std::numeric_limits<float>::max();
+
 struct StrategyFlags {
   std::string range, inverter, splitter, baseline;
-  std::optional<float> marchingScale, step;
+  std::optional<double> marchingScale, step;
   std::optional<bool> inversionInTraversal;
   std::string lod;  // empty: the scene's
   std::optional<float> lodBias;
@@ -170,7 +190,7 @@ struct StrategyFlags {
       const auto& d = scene.meshes[i].displacement;
       if (!d || d->lod >= *scene.lod) continue;
       const HeightMap& m = d->level0 ? *d->level0 : *d->map;
-      fmt::print(stderr, "oblong: warning: {}: meshes[{}]: map {} ({}x{}) has levels of detail up to {}: traced at {}, not {}\n",
+      eprint("oblong: warning: {}: meshes[{}]: map {} ({}x{}) has levels of detail up to {}: traced at {}, not {}\n",
                  scene.path, i, m.name(), m.width(), m.height(), lodLevels(m), d->lod, *scene.lod);
     }
   }
@@ -189,10 +209,11 @@ struct StrategyFlags {
     pick(c.inverter, c.inverterParams, inverter);
     pick(c.splitter, c.splitterParams, splitter);
     if (marchingScale) {
-      if (!(*marchingScale >= kMinMarchingScale) || !std::isfinite(*marchingScale))
-        fail("--marching-scale", "must be a finite number of texels >= {} (smaller only multiplies the work), got {}",
-             kMinMarchingScale, *marchingScale);
-      c.marchingScale = *marchingScale;
+      if (!(*marchingScale >= kMinMarchingScale) || !(*marchingScale <= kMaxFloat))
+        fail("--marching-scale",
+             "must be a number of texels >= {} (smaller only multiplies the work) and <= {:g} (a float), got {:g}",
+             kMinMarchingScale, kMaxFloat, *marchingScale);
+      c.marchingScale = float(*marchingScale);
     }
     if (inversionInTraversal) c.inversionInTraversal = *inversionInTraversal;
     // A --baseline other than the scene's drops the scene's parameters for it.
@@ -201,9 +222,10 @@ struct StrategyFlags {
       c.baselineParams = nlohmann::json::object();
     }
     if (step) {
-      if (!(*step > 0) || !std::isfinite(*step)) fail("--step", "must be a finite number > 0, got {}", *step);
+      if (!(*step > 0) || !(*step <= kMaxFloat))
+        fail("--step", "must be a number > 0 and at most {:g} (a float), got {:g}", kMaxFloat, *step);
       if (c.baseline != "fixedstep") fail("--step", "only applies to --baseline fixedstep");
-      c.fixedStep = *step;
+      c.fixedStep = float(*step);
       c.baselineParams.erase("step");
     }
     if (c.baseline == "tessellated") {
@@ -254,7 +276,7 @@ void warnBoxOnly(const Scene& scene, const EmbreeScene& accel) {
   for (const auto& p : accel.prismCounts()) {
     const size_t boxOnly = p.built - p.wellPosed;
     if (boxOnly == 0) continue;
-    fmt::print(stderr,
+    eprint(
                "oblong: warning: {}: meshes[{}]: {} of {} prisms are box-only (no projection bounds: the normals "
                "converge within the displacement, or the triangle is too thin or too far from its mesh's centre "
                "for its size), which makes them much slower to trace\n",
@@ -282,7 +304,8 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   opts.seed = parseSeed(f.seed);
   opts.integrator = parseIntegrator(f.integrator);
   opts.normals = parseShadingNormals(f.normals);
-  const ProgressMode mode = f.quiet ? ProgressMode::Never : parseProgressMode(f.progress);
+  const ProgressMode asked = parseProgressMode(f.progress);  // checked even under -q
+  const ProgressMode mode = f.quiet ? ProgressMode::Never : asked;
   checkImageOutput(f.out, "image");
   if (!f.aovs.empty()) {
     checkImageOutput(f.aovs, "AOVs");
@@ -292,11 +315,15 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   }
   if (!f.heatmap.empty()) checkImageOutput(f.heatmap, "heat map");
   if (!f.statsPath.empty()) checkOutputPath(f.statsPath, "statistics");
-  checkDistinctOutputs({{"-o", f.out}, {"--aovs", f.aovs}, {"--heatmap", f.heatmap}, {"--stats", f.statsPath}});
+  const std::vector<std::pair<std::string, std::string>> outputs = {
+      {"-o", f.out}, {"--aovs", f.aovs}, {"--heatmap", f.heatmap}, {"--stats", f.statsPath}};
+  checkDistinctOutputs(outputs);
+  checkNotInputs(outputs, {{"scene", scenePath}});
 
   Progress progress(mode);
   progress.phase("loading " + (scenePath.empty() ? std::string("the built-in scene") : scenePath));
   Scene scene = sceneFrom(scenePath);
+  checkNotInputs(outputs, sceneInputs(scenePath, scene));
   flags.applyLod(scene);
   const double loadSeconds = progress.elapsed();
   const AccelOptions accelOpts = flags.resolve(scene);
@@ -321,7 +348,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   progress.clear();
   warnBoxOnly(scene, accel);
   if (gInterrupted) {
-    fmt::print(stderr, "oblong: interrupted before rendering: nothing written\n");
+    eprint("oblong: interrupted before rendering: nothing written\n");
     return kInterruptedStatus;
   }
   progress.phase(fmt::format("rendering {}x{} at {} spp", opts.size.x, opts.size.y, opts.spp),
@@ -397,8 +424,9 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
 int runBake(const std::string& scenePath, const std::string& out, const std::string& size,
             const std::string& raysPath, const StrategyFlags& flags) {
   checkOutputPath(out, "baked scene");
-  checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}});
+  checkNotInputs({{"-o", out}}, {{"scene", scenePath}, {"--rays", raysPath}});
   Scene scene = sceneFrom(scenePath);
+  checkNotInputs({{"-o", out}}, sceneInputs(scenePath, scene));
   flags.applyLod(scene, "bake's rays carry no ray cones");
   const AccelOptions accelOpts = flags.resolve(scene);
   const ivec2 image = size.empty() ? scene.imageSize : parseSize(size);
@@ -411,15 +439,18 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   if (threads < 0) fail("--threads", "must be >= 0, got {}", threads);
   checkOutputPath(out, "hits");
   if (!statsPath.empty()) checkOutputPath(statsPath, "statistics");
-  checkDistinctOutputs({{"--rays", raysPath}, {"-o", out}, {"--stats", statsPath}});
+  const std::vector<std::pair<std::string, std::string>> outputs = {{"-o", out}, {"--stats", statsPath}};
+  checkDistinctOutputs(outputs);
+  checkNotInputs(outputs, {{"scene", scenePath}, {"--rays", raysPath}});
   const auto start = std::chrono::steady_clock::now();
   Scene scene = sceneFrom(scenePath);
+  checkNotInputs(outputs, sceneInputs(scenePath, scene));
   flags.applyLod(scene, "a rays file carries no ray cones");
   const AccelOptions accelOpts = flags.resolve(scene);
   const std::vector<Ray> rays = readRays(raysPath);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Stats::reset();
-  if (deviceFlag == "vulkan") return vk::traceCommand(scene, accelOpts, rays, raysPath, out, statsPath);
+  if (deviceFlag == "vulkan") return vk::traceCommand(scene, accelOpts, rays, raysPath, out, statsPath, &gInterrupted);
   EmbreeScene accel(scene, accelOpts);
   warnBoxOnly(scene, accel);
   std::vector<Hit> hits(rays.size());
@@ -434,7 +465,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - traceStart).count();
   // A hits file must hold every ray's answer: an interrupted trace writes none.
   if (gInterrupted) {
-    fmt::print(stderr, "oblong: interrupted: no hits written (a hits file holds every ray or none)\n");
+    eprint("oblong: interrupted: no hits written (a hits file holds every ray or none)\n");
     return kInterruptedStatus;
   }
   writeHits(out, hits);
@@ -675,6 +706,15 @@ int main(int argc, char** argv) {
   info->add_flag("--strategies", listStrategies, "list the registered strategies (what --range etc. accept)");
   info->add_flag("--json", infoJson, "with --strategies: as JSON (read by the experiments)");
 
+  // CLI11 says "A subcommand is required" for a misspelt one.
+  bool known = false;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    known = known || (argc > 1 && sub->get_name() == argv[1]);
+  if (argc > 1 && argv[1][0] != '-' && !known) {
+    eprint("oblong: command line: unknown command '{}' (render, trace, info or bake; oblong --help lists them)\n",
+           argv[1]);
+    return 1;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -684,24 +724,48 @@ int main(int argc, char** argv) {
     for (char& c : what)
       if (c == '\n' || c == '\r') c = ' ';
     while (!what.empty() && what.back() == ' ') what.pop_back();
-    fmt::print(stderr, "oblong: command line: {} (oblong --help lists the options)\n", what);
+    eprint("oblong: command line: {} (oblong --help lists the options)\n", what);
     return 1;
   }
+  int status = 0;
   try {
-    if (deviceFlag == "cpu") catchInterrupt();  // the Vulkan passes are not tiled: Ctrl-C ends them at once
+    // An empty value is never the default: `--lod ''` or `info ''` is a mistake (a
+    // variable that was not set), not a request for the scene's choice.
+    for (const CLI::App* sub : app.get_subcommands())
+      for (const CLI::Option* o : sub->get_options())
+        if (o->count() > 0 && o->get_type_size_min() > 0)
+          for (const std::string& v : o->results())
+            if (v.empty())
+              fail(o->get_name(), "{}",
+                   o->get_name() == "scene" ? "empty file name (omit it for the built-in scene)" : "empty value");
+    // Ctrl-C keeps what was rendered (render) or writes nothing (trace), on both devices.
+    if (*render || *trace) catchInterrupt();
     rf.defaultOut = renderOut->count() == 0;
-    if (*render) return runRender(scenePath, rf, flags);
-    if (*trace) return runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, flags);
-    if (*bake) return runBake(scenePath, bakeOut, bakeSize, raysPath, flags);
-    if (*info && listStrategies) return runStrategies(infoJson);
-    if (*info && infoJson) fail("--json", "only applies to --strategies");
-    if (*info) return runInfo(scenePath, range, lodFlag);
+    if (*render) status = runRender(scenePath, rf, flags);
+    else if (*trace) status = runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, flags);
+    else if (*bake) status = runBake(scenePath, bakeOut, bakeSize, raysPath, flags);
+    else if (*info && listStrategies) status = runStrategies(infoJson);
+    else if (*info && infoJson) fail("--json", "only applies to --strategies");
+    else if (*info) status = runInfo(scenePath, range, lodFlag);
   } catch (const Error& e) {
-    fmt::print(stderr, "oblong: {}\n", e.what());
+    eprint("oblong: {}\n", e.what());
     return 1;
+  } catch (const std::system_error& e) {
+    // fmt::print throws this when standard output is closed or full.
+    if (std::ferror(stdout) && !dynamic_cast<const std::filesystem::filesystem_error*>(&e)) {
+      eprint("oblong: standard output: write failed ({})\n", e.code().message());
+      return 1;
+    }
+    eprint("oblong: internal error: {}\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "oblong: internal error: {}\n", e.what());
+    eprint("oblong: internal error: {}\n", e.what());
     return 2;
   }
-  return 0;
+  // What was printed must have reached standard output (`info > /dev/full`).
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+    eprint("oblong: standard output: write failed ({})\n", std::strerror(errno));
+    return 1;
+  }
+  return status;
 }

@@ -1,6 +1,7 @@
 #include "render/output.h"
 
 #include "core/error.h"
+#include "core/input_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -19,16 +20,34 @@ namespace fs = std::filesystem;
 namespace {
 
 // The file a name finally refers to: symbolic links followed (also dangling ones, whose
-// target the write creates), relative targets taken against the link's folder.
-fs::path resolve(const std::string& path) {
+// target the write creates), relative targets taken against the link's folder. A loop
+// of links is an error naming the output.
+fs::path resolve(const std::string& path, bool throws = true) {
   fs::path p(path);
   std::error_code ec;
-  for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+  for (int hops = 0; fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+    if (hops == 40 && throws) fail(path, "cannot write: a loop of symbolic links");
     const fs::path t = fs::read_symlink(p, ec);
-    if (ec) break;
+    if ((ec || hops == 40) && !throws) return p;
+    if (ec) fail(path, "cannot write: cannot read the symbolic link ({})", ec.message());
     p = t.is_absolute() ? t : p.parent_path() / t;
   }
   return p;
+}
+
+// A name to compare outputs by: absolute, links followed, '.' and '..' resolved.
+fs::path comparable(const std::string& path, bool throws = true) {
+  std::error_code ec;
+  const fs::path abs = fs::absolute(resolve(path, throws), ec);
+  if (ec) return fs::path(path).lexically_normal();
+  const fs::path c = fs::weakly_canonical(abs, ec);
+  return ec ? abs.lexically_normal() : c;
+}
+
+bool isDevice(const fs::path& p) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(p, ec);
+  return fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st);
 }
 
 fs::path folderOf(const fs::path& p) { return p.has_parent_path() ? p.parent_path() : fs::path("."); }
@@ -57,11 +76,11 @@ std::string slurp(const fs::path& p) {
 }
 
 // A new empty temporary file name in `folder` with `ext`, created 0666 & ~umask like
-// any other output.
-fs::path makeTemp(const fs::path& folder, const std::string& stem, const std::string& ext) {
+// any other output. Errors name the output (`path`), not the hidden temporary name.
+fs::path makeTemp(const std::string& path, const fs::path& folder, const std::string& stem, const std::string& ext) {
   std::string name = (folder / ("." + stem + ".oblong-XXXXXX")).string() + ext;
   const int fd = ::mkstemps(name.data(), int(ext.size()));
-  if (fd < 0) fail(name, "cannot create a temporary output file ({})", errnoText());
+  if (fd < 0) fail(path, "cannot create a file in folder '{}' ({})", folder.string(), errnoText());
   const mode_t mask = ::umask(0);
   ::umask(mask);
   ::fchmod(fd, 0666 & ~mask);
@@ -73,9 +92,12 @@ fs::path makeTemp(const fs::path& folder, const std::string& stem, const std::st
 
 void checkOutputPath(const std::string& path, const std::string& what) {
   if (path.empty()) fail("(empty name)", "the {} output needs a file name", what);
+  if (path.find('\0') != std::string::npos) fail("(name with NUL)", "output file names cannot contain NUL");
   const fs::path target = resolve(path);
   std::error_code ec;
   const fs::file_status st = fs::status(target, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    fail(path, "cannot write {} ({})", what, ec.message());
   if (fs::is_directory(st)) fail(path, "cannot write {}: is a directory", what);
   if (fs::exists(st) && !fs::is_regular_file(st)) {  // a device or FIFO: written through
     if (::access(target.c_str(), W_OK) != 0) fail(path, "cannot write {} ({})", what, errnoText());
@@ -86,6 +108,10 @@ void checkOutputPath(const std::string& path, const std::string& what) {
   if (::access(folder.c_str(), W_OK | X_OK) != 0)
     fail(path, "cannot write {}: folder '{}' is not writable ({})", what, folder.string(), errnoText());
   if (fs::exists(st) && ::access(target.c_str(), W_OK) != 0) fail(path, "cannot write {} ({})", what, errnoText());
+  // Permissions do not tell everything (a read-only or special filesystem such as /proc
+  // accepts access(W_OK) from root): create the temporary file the write will use.
+  std::error_code rm;
+  fs::remove(makeTemp(path, folder, target.filename().string(), target.extension().string()), rm);
 }
 
 void checkDistinctOutputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
@@ -94,10 +120,22 @@ void checkDistinctOutputs(const std::vector<std::pair<std::string, std::string>>
       const auto& [fa, a] = outputs[i];
       const auto& [fb, b] = outputs[j];
       if (a.empty() || b.empty()) continue;
-      const fs::path ra = fs::weakly_canonical(resolve(a)), rb = fs::weakly_canonical(resolve(b));
-      if (ra == rb && ra.string().rfind("/dev/", 0) != 0)
-        fail(b, "{} and {} name the same file", fa, fb);
+      const fs::path ra = comparable(a), rb = comparable(b);
+      // A device (/dev/null, /dev/stdout) may take several outputs.
+      if ((ra == rb || sameFile(a, b)) && !isDevice(ra)) fail(b, "{} and {} name the same file", fa, fb);
     }
+}
+
+void checkNotInputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                    const std::vector<std::pair<std::string, std::string>>& inputs) {
+  for (const auto& [flag, out] : outputs) {
+    if (out.empty()) continue;
+    const fs::path ro = comparable(out);
+    if (isDevice(ro)) continue;
+    for (const auto& [what, in] : inputs)
+      if (!in.empty() && (sameFile(out, in) || ro == comparable(in, false)))
+        fail(out, "{} names an input of this command ({} '{}'): writing it would destroy it", flag, what, in);
+  }
 }
 
 void writeOutput(const std::string& path, const std::function<void(const std::string&)>& write) {
@@ -106,7 +144,10 @@ void writeOutput(const std::string& path, const std::function<void(const std::st
   std::error_code ec;
   const fs::file_status st = fs::status(target, ec);
   const bool through = fs::exists(st) && !fs::is_regular_file(st);
-  const fs::path tmp = makeTemp(through ? fs::temp_directory_path() : folderOf(target), stem, ext);
+  std::error_code tec;
+  fs::path tmpFolder = through ? fs::temp_directory_path(tec) : folderOf(target);
+  if (tec) tmpFolder = "/tmp";
+  const fs::path tmp = makeTemp(path, tmpFolder, stem, ext);
   try {
     write(tmp.string());
     if (through) {

@@ -20,8 +20,14 @@ namespace oblong {
 void checkOutputPath(const std::string& path, const std::string& what);
 
 // Distinct outputs of one command must not name the same file (both would be written).
-// `outputs` holds (flag, path) pairs; empty paths are ignored.
+// `outputs` holds (flag, path) pairs; empty paths are ignored. Compared as files:
+// absolute, symbolic links and '..' resolved, hard links by inode.
 void checkDistinctOutputs(const std::vector<std::pair<std::string, std::string>>& outputs);
+
+// An output must not be one of the command's inputs (scene, meshes, maps, ray file):
+// `inputs` holds (what, path) pairs. Compared as files: links and '..' resolved.
+void checkNotInputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                    const std::vector<std::pair<std::string, std::string>>& inputs);
 
 // Writes `path` through `write`, which receives the name of the file to write (a
 // temporary one; it keeps path's extension, so image writers pick the same format).

@@ -57,7 +57,7 @@ void Progress::phase(const std::string& what, int64_t total) {
   plainTenths_ = 0;
   phaseStart_ = std::chrono::steady_clock::now();
   if (plain_) {
-    fmt::print(stderr, "  [{:>7}] {}\n", seconds(elapsed()), what);
+    eprint("  [{:>7}] {}\n", seconds(elapsed()), what);
     std::fflush(stderr);
   }
   if (tty_) draw();
@@ -76,14 +76,14 @@ std::string Progress::line() const {
 void Progress::draw() {
   // Called with m_ held.
   if (tty_) {
-    fmt::print(stderr, "\r\033[K{}", line());
+    eprint("\r\033[K{}", line());
     drawn_ = true;
   }
   if (plain_ && total_ > 0) {
     const int tenths = int(10 * std::min(1.0, double(done_.load()) / double(total_)));
     if (tenths > plainTenths_ && tenths < 10) {
       plainTenths_ = tenths;
-      fmt::print(stderr, "  [{:>7}] {}\n", seconds(elapsed()), line().substr(2));
+      eprint("  [{:>7}] {}\n", seconds(elapsed()), line().substr(2));
     }
   }
   std::fflush(stderr);
@@ -98,7 +98,7 @@ void Progress::loop() {
 void Progress::clear() {
   std::lock_guard<std::mutex> l(m_);
   if (tty_ && drawn_) {
-    fmt::print(stderr, "\r\033[K");
+    eprint("\r\033[K");
     std::fflush(stderr);
     drawn_ = false;
   }

@@ -1,6 +1,7 @@
 #include "render/rays_io.h"
 
 #include "core/error.h"
+#include "core/input_file.h"
 #include "render/output.h"
 
 #include <fmt/format.h>
@@ -73,12 +74,7 @@ void checkRay(const Ray& r, const std::string& where) {
 }
 
 // Ray files are read to the end: a FIFO would block, a device never ends.
-void checkRegular(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "file not found");
-  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
-}
+void checkRegular(const std::string& path) { checkInputFile(path); }
 
 }  // namespace
 

@@ -181,7 +181,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--grazing") && i + 1 < argc) gGrazing = std::max(0, std::atoi(argv[++i]));
     else if (!std::strcmp(argv[i], "--size") && i + 1 < argc) {
       if (std::sscanf(argv[++i], "%dx%d", &gSize.x, &gSize.y) != 2 || gSize.x <= 0 || gSize.y <= 0) {
-        fmt::print(stderr, "bench_traversal: --size: expected WxH, got '{}'\n", argv[i]);
+        eprint("bench_traversal: --size: expected WxH, got '{}'\n", argv[i]);
         return 1;
       }
     } else rest.push_back(argv[i]);
@@ -190,7 +190,7 @@ int main(int argc, char** argv) {
   try {
     scene();
   } catch (const std::exception& e) {
-    fmt::print(stderr, "bench_traversal: {}\n", e.what());
+    eprint("bench_traversal: {}\n", e.what());
     return 1;
   }
   const std::pair<const char*, const std::vector<Ray>& (*)()> families[] = {

@@ -212,8 +212,10 @@ std::unique_ptr<Intersector> makeBruteForce(ParamSet&, const BaselineContext& ct
 std::unique_ptr<Intersector> makeFixedStep(ParamSet& params, const BaselineContext& ctx) {
   const TraversalConfig& cfg = ctx.config;
   const Displacement& disp = ctx.disp;
+  // Errors name where the step came from: the scene's baseline parameters or --step.
+  const std::string stepFrom = params.has("step") ? params.where() + ".step" : std::string("--step");
   const float step = params.get<float>("step", cfg.fixedStep);
-  if (!(step >= 0) || !std::isfinite(step)) fail("traversal", "fixed step must be >= 0 (0: one texel), got {}", step);
+  if (!(step >= 0) || !std::isfinite(step)) fail(stepFrom, "fixed step must be >= 0 (0: one texel), got {}", step);
   ParamSet ips(cfg.inverterParams, cfg.where("strategies.inverter"));
   auto inv = createInverter(cfg.inverter, ips);
   TraversalMesh mesh;
@@ -227,7 +229,7 @@ std::unique_ptr<Intersector> makeFixedStep(ParamSet& params, const BaselineConte
         texel = std::min({texel, double(glm::length(F.PX)), double(glm::length(F.PY))});
       }
     if (std::isfinite(texel) && double(step) < kMinFixedStepTexels * texel)
-      fail("--step", "{} is below {} of the smallest texel's world size ({:g}): at least {:g}", step,
+      fail(stepFrom, "{} is below {} of the smallest texel's world size ({:g}): at least {:g}", step,
            kMinFixedStepTexels, texel, kMinFixedStepTexels * texel);
   }
   return std::make_unique<FixedStep>(std::move(mesh), step, std::move(inv));

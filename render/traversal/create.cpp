@@ -21,7 +21,7 @@ void warnSkippedTriangles(const TraversalMesh& mesh, const std::string& what) {
   for (size_t i = mesh.params.size(); i-- > 0;)
     if (!mesh.params[i].valid) ++skipped, first = i;
   if (skipped)
-    fmt::print(stderr,
+    eprint(
                "oblong: warning: {}: skipped {} of {} displaced triangles that cannot be displaced (zero area, "
                "degenerate uvs or vanishing normals; first: triangle {})\n",
                what, skipped, mesh.params.size(), first);

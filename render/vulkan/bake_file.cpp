@@ -57,7 +57,8 @@ uint64_t checksum64(const void* data, size_t bytes) {
   return (h ^ uint64_t(bytes)) * prime;
 }
 
-void writeBake(const std::string& path, const BakedScene& b) {
+uint64_t writeBake(const std::string& path, const BakedScene& b, const std::string& shown) {
+  const std::string& name = shown.empty() ? path : shown;
   const GpuRecords& R = b.records;
   nlohmann::json meta;
   meta["format"] = "oblong baked scene";
@@ -121,7 +122,7 @@ void writeBake(const std::string& path, const BakedScene& b) {
   put(header, offset);
   put(header, checksum64(table.data(), table.size()));
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) fail(path, "cannot open for writing");
+  if (!f) fail(name, "cannot open for writing");
   f.write(header.data(), std::streamsize(header.size()));
   f.write(table.data(), std::streamsize(table.size()));
   const char zeros[8] = {};
@@ -130,7 +131,8 @@ void writeBake(const std::string& path, const BakedScene& b) {
     f.write(zeros, std::streamsize((8 - p.bytes % 8) % 8));
   }
   f.close();
-  if (!f) fail(path, "write failed (disk full?)");
+  if (!f) fail(name, "write failed (No space left on device, or the device failed)");
+  return offset;
 }
 
 BakedScene readBake(const std::string& path) {

@@ -40,7 +40,8 @@ struct BakedScene {
 uint64_t checksum64(const void* data, size_t bytes);
 
 // Throws oblong::Error naming the file on any write error.
-void writeBake(const std::string& path, const BakedScene& b);
+// Returns the bytes written; errors name `shown` (the final name) when given.
+uint64_t writeBake(const std::string& path, const BakedScene& b, const std::string& shown = "");
 // Throws oblong::Error with one line naming the file on a missing, foreign, truncated,
 // corrupt or other-version file.
 BakedScene readBake(const std::string& path);

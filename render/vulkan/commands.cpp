@@ -31,11 +31,34 @@ void writeJson(const std::string& path, const nlohmann::json& j) { writeTextOutp
 }  // namespace
 
 int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector<Ray>& rays,
-                 const std::string& raysPath, const std::string& out, const std::string& statsPath) {
+                 const std::string& raysPath, const std::string& out, const std::string& statsPath,
+                 const std::atomic<bool>* interrupt) {
   VulkanScene vs(scene, opts);
+  // In batches, so that Ctrl-C is answered within one batch and the host's staging
+  // memory stays bounded; each ray's answer does not depend on its batch.
+  constexpr size_t kBatch = size_t(1) << 18;
+  std::vector<Hit> hits;
   std::vector<RayCounters> perRay;
+  hits.reserve(rays.size());
+  perRay.reserve(rays.size());
   double seconds = 0;
-  const std::vector<Hit> hits = vs.trace(rays, &perRay, &seconds);
+  for (size_t b = 0; b < rays.size(); b += kBatch) {
+    if (interrupt && interrupt->load()) {
+      eprint("oblong: interrupted: no hits written (a hits file holds every ray or none)\n");
+      return 130;
+    }
+    const std::vector<Ray> batch(rays.begin() + ptrdiff_t(b), rays.begin() + ptrdiff_t(std::min(rays.size(), b + kBatch)));
+    std::vector<RayCounters> counters;
+    double s = 0;
+    const std::vector<Hit> h = vs.trace(batch, &counters, &s);
+    hits.insert(hits.end(), h.begin(), h.end());
+    perRay.insert(perRay.end(), counters.begin(), counters.end());
+    seconds += s;
+  }
+  if (interrupt && interrupt->load()) {
+    eprint("oblong: interrupted: no hits written (a hits file holds every ray or none)\n");
+    return 130;
+  }
   writeHits(out, hits);
   RayCounters total;
   size_t found = 0;
@@ -62,6 +85,8 @@ int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOpti
                   const std::string& aovs, const std::string& heatmap, const std::string& statsPath) {
   VulkanScene vs(scene, opts);
   const RenderResult res = render(scene, vs, ro);
+  if (res.partial) eprint("oblong: interrupted: writing the {} of {} pixels rendered (the rest is black)\n",
+                          res.pixelsDone, int64_t(ro.size.x) * ro.size.y);
   writeImage(res.aov.color, out);
   if (!aovs.empty()) writeAOVs(res.aov, aovs);
   if (!heatmap.empty()) writeHeatMap(res.aov, heatmap);
@@ -91,6 +116,8 @@ int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOpti
     j["spp"] = ro.spp;
     j["seed"] = ro.seed;
     j["seconds"] = {{"build", vs.buildSeconds()}, {"render", res.seconds}};
+    j["partial"] = res.partial;
+    j["pixels"] = {{"rendered", res.pixelsDone}, {"total", int64_t(ro.size.x) * ro.size.y}};
     j["rays"] = {{"primary", res.primaryRays}, {"secondary", res.secondaryRays}, {"hits", res.hits}};
     j["mrays_per_second"] = mrays;
     j["steps_per_camera_ray"] = meanPrimarySteps;
@@ -101,7 +128,7 @@ int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOpti
     j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
     writeJson(statsPath, j);
   }
-  return 0;
+  return res.partial ? 130 : 0;
 }
 
 int bakeCommand(const Scene& scene, const AccelOptions& opts, ivec2 image, const std::vector<Ray>& rays,
@@ -121,8 +148,10 @@ int bakeCommand(const Scene& scene, const AccelOptions& opts, ivec2 image, const
     if (!(rays[i].tmin >= 0.0f)) fail("--rays", "ray {}: tmin = {} < 0 (Vulkan needs tmin >= 0)", i, rays[i].tmin);
     b.rays.push_back({rays[i].o, rays[i].d, rays[i].tmin, rays[i].tmax, rays[i].lod, 0.0f});
   }
-  writeBake(out, b);
-  const auto bytes = std::filesystem::file_size(out);
+  uint64_t bytes = 0;
+  // Through a temporary file renamed into place: a failed write leaves no truncated
+  // file and keeps an earlier one.
+  writeOutput(out, [&](const std::string& tmp) { bytes = writeBake(tmp, b, out); });
   fmt::print("oblong bake: {} -> {}: {} meshes, {} base triangles, {}, {:.1f} MiB (camera {}x{}{})\n", scene.path,
              out, scene.meshes.size(), b.records.baseTriangles, b.records.geometryName, double(bytes) / (1 << 20),
              image.x, image.y, rays.empty() ? "" : fmt::format(", {} rays", rays.size()));

@@ -8,6 +8,7 @@
 #include "render/embree_scene.h"
 #include "render/renderer.h"
 
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -16,10 +17,12 @@ namespace oblong::vk {
 // Writes the hits CSV (render/rays_io.h format) and prints one summary line; returns
 // the exit status. Throws oblong::Error (one line) on any problem.
 int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector<Ray>& rays,
-                 const std::string& raysPath, const std::string& out, const std::string& statsPath);
+                 const std::string& raysPath, const std::string& out, const std::string& statsPath,
+                 const std::atomic<bool>* interrupt = nullptr);
 
 // Renders (any integrator, render/vulkan/vulkan_render.h); writes the image and the
-// optional AOVs / heat map / stats.
+// optional AOVs / heat map / stats. Interrupted (RenderOptions::interrupt) between
+// bands of samples: writes what was rendered, marked partial, and returns 130.
 int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOptions& ro, const std::string& out,
                   const std::string& aovs, const std::string& heatmap, const std::string& statsPath);
 

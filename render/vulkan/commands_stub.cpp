@@ -13,7 +13,7 @@ namespace {
 }  // namespace
 
 int traceCommand(const Scene&, const AccelOptions&, const std::vector<Ray>&, const std::string&, const std::string&,
-                 const std::string&) {
+                 const std::string&, const std::atomic<bool>*) {
   noVulkan();
 }
 

@@ -279,7 +279,7 @@ int run(const Options& o) {
   const uint64_t baseTriangles = S.records.baseTriangles;
   Runner runner(std::move(S.records));
   const double buildSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-  fmt::print(stderr, "oblong_vkbench: {} on {} ({}): {} base triangles, {} camera rays, built in {:.2f} s\n", o.file,
+  eprint("oblong_vkbench: {} on {} ({}): {} base triangles, {} camera rays, built in {:.2f} s\n", o.file,
              runner.deviceName(), runner.driverInfo(), baseTriangles, camera.size(), buildSeconds);
 
   Bench B{runner, 0, {}};
@@ -384,16 +384,16 @@ int main(int argc, char** argv) {
     std::string what = e.what();
     for (char& c : what)
       if (c == '\n' || c == '\r') c = ' ';
-    fmt::print(stderr, "oblong_vkbench: command line: {} (--help lists the options)\n", what);
+    eprint("oblong_vkbench: command line: {} (--help lists the options)\n", what);
     return 1;
   }
   try {
     return run(o);
   } catch (const Error& e) {
-    fmt::print(stderr, "oblong_vkbench: {}\n", e.what());
+    eprint("oblong_vkbench: {}\n", e.what());
     return 1;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "oblong_vkbench: internal error: {}\n", e.what());
+    eprint("oblong_vkbench: internal error: {}\n", e.what());
     return 2;
   }
 }

@@ -4,6 +4,7 @@
 #include "render/vulkan/vulkan_render.h"
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "render/camera.h"
 #include "render/cone_lod.h"
 #include "render/sampling.h"
@@ -11,6 +12,15 @@
 namespace oblong::vk {
 
 namespace {
+
+// Host memory of one sample in flight (its path, camera ray, hit, counters, value, and
+// its share of the shadow and bounce queues: measured about 590 bytes with one light,
+// rounded up) and of one pixel (the samples' sum and the camera rays' counters).
+constexpr size_t kBytesPerSample = 1024;
+constexpr size_t kBytesPerPixel = sizeof(vec3) + sizeof(RayCounters);
+// Samples traced per band: large enough to fill a GPU, small enough to bound memory
+// (~256 MiB) and to answer Ctrl-C within one band.
+constexpr size_t kBandSamples = size_t(1) << 18;
 
 struct Shader {
   const Scene& scene;
@@ -35,8 +45,17 @@ struct Path {
 RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions& opts) {
   if (opts.size.x <= 0 || opts.size.y <= 0) fail("render", "image size must be positive");
   if (opts.spp <= 0) fail("--spp", "must be >= 1, got {}", opts.spp);
-  const int W = opts.size.x, H = opts.size.y, spp = opts.spp;
-  const size_t npx = size_t(W) * H, ns = npx * size_t(spp);
+  const int W = opts.size.x, spp = opts.spp;
+  const size_t npx = size_t(W) * size_t(opts.size.y), ns = npx * size_t(spp);
+  // The wavefront's host memory grows with the samples in flight: they go in bands of
+  // at most kBandSamples, in sample order, so any --size and --spp render in bounded
+  // memory, and Ctrl-C is taken between bands. Each sample's path depends on its own
+  // random stream only, so the image does not depend on the banding.
+  const size_t band = std::min(ns, kBandSamples);
+  checkFits("--device vulkan", "rendering on Vulkan", npx * kBytesPerPixel + band * kBytesPerSample,
+            "choose a smaller --size",
+            fmt::format("{} pixels at {} bytes and {} samples in flight at {} bytes", npx, kBytesPerPixel, band,
+                        kBytesPerSample));
   RenderResult res;
   AOVs& aov = res.aov;
   aov.allocate(opts.size);
@@ -55,169 +74,188 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
   const RayCone camCone{0.0f, cam.pixelSpread()};
   std::unique_ptr<ConeLod> cone;
   if (scene.lodCone) cone = std::make_unique<ConeLod>(scene);
-  std::vector<Path> paths(ns);
-  std::vector<Ray> rays(ns);
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const size_t px = size_t(y) * W + x;
-      for (int s = 0; s < spp; ++s) {
-        Path& p = paths[px * spp + s];
-        p.rng = Rng(opts.seed * 0x9E3779B97F4A7C15ULL + px, uint64_t(s));
-        const float jx = s == 0 ? 0.5f : p.rng.uniform(), jy = s == 0 ? 0.5f : p.rng.uniform();
-        Ray& r = rays[px * spp + s];
-        r = cam.generate(x + jx, y + jy);
-        if (cone) r.lod = cone->lod(r, camCone, scene.lodBias);
-        res.cameraLodSum += std::max(r.lod, 0.0f), res.cameraLodZero += r.lod <= 0.0f;
-      }
-    }
-  std::vector<RayCounters> camera, more;
-  double seconds = 0;
-  const std::vector<Hit> hits = accel.trace(rays, &camera, &seconds);
-  res.seconds += seconds;
-  for (const RayCounters& c : camera) res.counters += c;
+  std::vector<vec3> pixelSum(npx, vec3(0.0f));    // the samples' values, summed in order
+  std::vector<RayCounters> pixelWork(npx);         // the camera rays' counters
 
-  // First hits: primary colour, AOVs, and the start of ao / path.
-  std::vector<vec3> value(ns, vec3(0.0f));
-  std::vector<size_t> owner;  // path of each queued secondary ray
-  std::vector<Ray> queue;
-  for (size_t k = 0; k < ns; ++k) {
-    const Ray& r = rays[k];
-    const Hit& h = hits[k];
-    Path& p = paths[k];
-    if (!h.valid()) {
-      value[k] = opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
-      continue;
+  // Samples [k0, k1) of the image (sample k: pixel k / spp, sample k % spp).
+  auto renderBand = [&](size_t k0, size_t k1) {
+    const size_t nb = k1 - k0;
+    std::vector<Path> paths(nb);
+    std::vector<Ray> rays(nb);
+    for (size_t j = 0; j < nb; ++j) {
+      const size_t k = k0 + j, px = k / size_t(spp);
+      const int s = int(k % size_t(spp)), x = int(px % size_t(W)), y = int(px / size_t(W));
+      Path& p = paths[j];
+      p.rng = Rng(opts.seed * 0x9E3779B97F4A7C15ULL + px, uint64_t(s));
+      const float jx = s == 0 ? 0.5f : p.rng.uniform(), jy = s == 0 ? 0.5f : p.rng.uniform();
+      Ray& r = rays[j];
+      r = cam.generate(float(x) + jx, float(y) + jy);
+      if (cone) r.lod = cone->lod(r, camCone, scene.lodBias);
+      res.cameraLodSum += std::max(r.lod, 0.0f), res.cameraLodZero += r.lod <= 0.0f;
     }
-    ++res.hits;
-    vec3 ng, n;
-    sh.normals(r, h, ng, n);
-    if (k % spp == 0) {
-      aov.depth[k / spp] = h.t;
-      aov.normal[k / spp] = n;
-    }
-    if (opts.integrator == Integrator::Primary) {
-      value[k] = 0.5f * n + 0.5f;
-    } else if (opts.integrator == Integrator::AO) {
-      const vec3 pt = r.at(h.t);
-      const vec3 d = cosineSample(n, p.rng);
-      if (glm::dot(d, ng) <= 0) continue;  // below the geometric surface: occluded
-      owner.push_back(k);
-      queue.push_back(Ray{spawnOrigin(pt, ng, d), d, 0.0f, aoRadius, r.lod});
-    } else {
-      p.pos = r.at(h.t), p.nrm = n, p.geo = ng, p.mesh = h.mesh, p.alive = true;
-    }
-  }
-  auto traceQueue = [&](bool anyHit) {
-    std::vector<Hit> out = accel.trace(queue, &more, &seconds, anyHit);
+    std::vector<RayCounters> camera, more;
+    double seconds = 0;
+    const std::vector<Hit> hits = accel.trace(rays, &camera, &seconds);
     res.seconds += seconds;
-    res.secondaryRays += int64_t(queue.size());
-    for (const RayCounters& c : more) res.counters += c;
-    return out;
-  };
-  if (opts.integrator == Integrator::AO && !queue.empty()) {
-    const std::vector<Hit> occ = traceQueue(true);
-    for (size_t q = 0; q < queue.size(); ++q) value[owner[q]] = vec3(occ[q].valid() ? 0.0f : 1.0f);
-  }
-  if (opts.integrator == Integrator::Path) {
-    for (int depth = 0;; ++depth) {
-      // Direct light at every live vertex (Tracer::direct): one shadow ray per light
-      // that can light it, then the sum over the lights in order.
-      struct Shadow {
-        size_t path;
-        vec3 contribution;
-      };
-      std::vector<Shadow> shadows;
-      queue.clear();
-      for (size_t k = 0; k < ns; ++k) {
-        const Path& p = paths[k];
-        if (!p.alive) continue;
-        const vec3 albedo = scene.meshes[size_t(p.mesh)].albedo;
-        for (const Light& light : scene.lights) {
-          vec3 wi;
-          float dist = kInfinity, falloff = 1.0f;
-          if (light.type == Light::Type::Directional) {
-            wi = -glm::normalize(light.direction);
-          } else {
-            wi = light.position - p.pos;
-            dist = glm::length(wi);
-            if (!(dist > 0)) continue;
-            wi /= dist;
-            falloff = 1.0f / (dist * dist);
+    for (const RayCounters& c : camera) res.counters += c;
+
+    // First hits: primary colour, AOVs, and the start of ao / path.
+    std::vector<vec3> value(nb, vec3(0.0f));
+    std::vector<size_t> owner;  // path of each queued secondary ray
+    std::vector<Ray> queue;
+    for (size_t j = 0; j < nb; ++j) {
+      const size_t k = k0 + j;
+      const Ray& r = rays[j];
+      const Hit& h = hits[j];
+      Path& p = paths[j];
+      if (!h.valid()) {
+        value[j] = opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
+        continue;
+      }
+      ++res.hits;
+      vec3 ng, n;
+      sh.normals(r, h, ng, n);
+      if (k % size_t(spp) == 0) {
+        aov.depth[k / size_t(spp)] = h.t;
+        aov.normal[k / size_t(spp)] = n;
+      }
+      if (opts.integrator == Integrator::Primary) {
+        value[j] = 0.5f * n + 0.5f;
+      } else if (opts.integrator == Integrator::AO) {
+        const vec3 pt = r.at(h.t);
+        const vec3 d = cosineSample(n, p.rng);
+        if (glm::dot(d, ng) <= 0) continue;  // below the geometric surface: occluded
+        owner.push_back(j);
+        queue.push_back(Ray{spawnOrigin(pt, ng, d), d, 0.0f, aoRadius, r.lod});
+      } else {
+        p.pos = r.at(h.t), p.nrm = n, p.geo = ng, p.mesh = h.mesh, p.alive = true;
+      }
+    }
+    auto traceQueue = [&](bool anyHit) {
+      std::vector<Hit> out = accel.trace(queue, &more, &seconds, anyHit);
+      res.seconds += seconds;
+      res.secondaryRays += int64_t(queue.size());
+      for (const RayCounters& c : more) res.counters += c;
+      return out;
+    };
+    if (opts.integrator == Integrator::AO && !queue.empty()) {
+      const std::vector<Hit> occ = traceQueue(true);
+      for (size_t q = 0; q < queue.size(); ++q) value[owner[q]] = vec3(occ[q].valid() ? 0.0f : 1.0f);
+    }
+    if (opts.integrator == Integrator::Path) {
+      for (int depth = 0;; ++depth) {
+        // Direct light at every live vertex (Tracer::direct): one shadow ray per light
+        // that can light it, then the sum over the lights in order.
+        struct Shadow {
+          size_t path;
+          vec3 contribution;
+        };
+        std::vector<Shadow> shadows;
+        queue.clear();
+        for (size_t j = 0; j < nb; ++j) {
+          const Path& p = paths[j];
+          if (!p.alive) continue;
+          const vec3 albedo = scene.meshes[size_t(p.mesh)].albedo;
+          for (const Light& light : scene.lights) {
+            vec3 wi;
+            float dist = kInfinity, falloff = 1.0f;
+            if (light.type == Light::Type::Directional) {
+              wi = -glm::normalize(light.direction);
+            } else {
+              wi = light.position - p.pos;
+              dist = glm::length(wi);
+              if (!(dist > 0)) continue;
+              wi /= dist;
+              falloff = 1.0f / (dist * dist);
+            }
+            const float cosTheta = glm::dot(p.nrm, wi);
+            if (cosTheta <= 0 || glm::dot(p.geo, wi) <= 0) continue;
+            shadows.push_back({j, albedo * light.intensity * (cosTheta * falloff / kPi)});
+            queue.push_back(Ray{p.pos + spawnEps(p.pos) * p.geo, wi, 0.0f, dist * (1.0f - 1e-4f), rays[j].lod});
           }
-          const float cosTheta = glm::dot(p.nrm, wi);
-          if (cosTheta <= 0 || glm::dot(p.geo, wi) <= 0) continue;
-          shadows.push_back({k, albedo * light.intensity * (cosTheta * falloff / kPi)});
-          queue.push_back(Ray{p.pos + spawnEps(p.pos) * p.geo, wi, 0.0f, dist * (1.0f - 1e-4f), rays[k].lod});
         }
-      }
-      if (!queue.empty()) {
-        const std::vector<Hit> occ = traceQueue(true);
-        std::vector<vec3> direct(ns, vec3(0.0f));
-        for (size_t q = 0; q < shadows.size(); ++q)
-          if (!occ[q].valid()) direct[shadows[q].path] += shadows[q].contribution;
-        for (size_t k = 0; k < ns; ++k)
-          if (paths[k].alive) paths[k].L += paths[k].beta * direct[k];
-      }
-      // Continue or end each path; queue the bounce rays.
-      owner.clear();
-      queue.clear();
-      for (size_t k = 0; k < ns; ++k) {
-        Path& p = paths[k];
-        if (!p.alive) continue;
-        if (depth + 1 >= opts.maxDepth) {
-          p.alive = false;
-          continue;
+        if (!queue.empty()) {
+          const std::vector<Hit> occ = traceQueue(true);
+          std::vector<vec3> direct(nb, vec3(0.0f));
+          for (size_t q = 0; q < shadows.size(); ++q)
+            if (!occ[q].valid()) direct[shadows[q].path] += shadows[q].contribution;
+          for (size_t j = 0; j < nb; ++j)
+            if (paths[j].alive) paths[j].L += paths[j].beta * direct[j];
         }
-        p.beta *= scene.meshes[size_t(p.mesh)].albedo;
-        if (depth >= 3) {
-          const float q = std::min(0.95f, std::max({p.beta.x, p.beta.y, p.beta.z}));
-          if (p.rng.uniform() >= q) {
+        // Continue or end each path; queue the bounce rays.
+        owner.clear();
+        queue.clear();
+        for (size_t j = 0; j < nb; ++j) {
+          Path& p = paths[j];
+          if (!p.alive) continue;
+          if (depth + 1 >= opts.maxDepth) {
             p.alive = false;
             continue;
           }
-          p.beta /= q;
+          p.beta *= scene.meshes[size_t(p.mesh)].albedo;
+          if (depth >= 3) {
+            const float q = std::min(0.95f, std::max({p.beta.x, p.beta.y, p.beta.z}));
+            if (p.rng.uniform() >= q) {
+              p.alive = false;
+              continue;
+            }
+            p.beta /= q;
+          }
+          const vec3 d = cosineSample(p.nrm, p.rng);
+          if (glm::dot(d, p.geo) <= 0) {
+            p.alive = false;
+            continue;
+          }
+          owner.push_back(j);
+          queue.push_back(Ray{spawnOrigin(p.pos, p.geo, d), d, 0.0f, kInfinity, rays[j].lod});
         }
-        const vec3 d = cosineSample(p.nrm, p.rng);
-        if (glm::dot(d, p.geo) <= 0) {
-          p.alive = false;
-          continue;
+        if (queue.empty()) break;
+        const std::vector<Hit> bh = traceQueue(false);
+        for (size_t q = 0; q < queue.size(); ++q) {
+          Path& p = paths[owner[q]];
+          if (!bh[q].valid()) {
+            p.L += p.beta * opts.sky;
+            p.alive = false;
+            continue;
+          }
+          sh.normals(queue[q], bh[q], p.geo, p.nrm);
+          p.pos = queue[q].at(bh[q].t);
+          p.mesh = bh[q].mesh;
         }
-        owner.push_back(k);
-        queue.push_back(Ray{spawnOrigin(p.pos, p.geo, d), d, 0.0f, kInfinity, rays[k].lod});
       }
-      if (queue.empty()) break;
-      const std::vector<Hit> bh = traceQueue(false);
-      for (size_t q = 0; q < queue.size(); ++q) {
-        Path& p = paths[owner[q]];
-        if (!bh[q].valid()) {
-          p.L += p.beta * opts.sky;
-          p.alive = false;
-          continue;
-        }
-        sh.normals(queue[q], bh[q], p.geo, p.nrm);
-        p.pos = queue[q].at(bh[q].t);
-        p.mesh = bh[q].mesh;
-      }
+      for (size_t j = 0; j < nb; ++j)
+        if (hits[j].valid()) value[j] = paths[j].L;
     }
-    for (size_t k = 0; k < ns; ++k)
-      if (hits[k].valid()) value[k] = paths[k].L;
-  }
+    for (size_t j = 0; j < nb; ++j) {
+      const size_t px = (k0 + j) / size_t(spp);
+      pixelSum[px] += value[j];
+      pixelWork[px] += camera[j];
+    }
+    res.primaryRays += int64_t(nb);
+  };
 
-  for (size_t px = 0; px < npx; ++px) {
-    vec3 sum(0.0f);
-    RayCounters primary;
-    for (int s = 0; s < spp; ++s) {
-      sum += value[px * spp + s];
-      primary += camera[px * spp + s];
+  size_t done = 0;
+  while (done < ns) {
+    if (opts.interrupt && opts.interrupt->load()) {
+      res.partial = true;
+      break;
     }
-    aov.color.pixels[px] = sum / float(spp);
+    const size_t next = std::min(ns, done + band);
+    renderBand(done, next);
+    done = next;
+  }
+  // Pixels whose every sample was traced; the rest stay black when interrupted.
+  res.pixelsDone = int64_t(done / size_t(spp));
+  for (size_t px = 0; px < size_t(res.pixelsDone); ++px) {
+    aov.color.pixels[px] = pixelSum[px] / float(spp);
     const float inv = 1.0f / float(spp);
+    const RayCounters& primary = pixelWork[px];
     aov.steps[px] = float(primary.steps()) * inv;
     aov.rangeQueries[px] = float(primary.rangeQueries) * inv;
     aov.inversions[px] = float(primary.inversions) * inv;
     aov.cellsMarched[px] = float(primary.cellsMarched) * inv;
   }
-  res.primaryRays = int64_t(ns);
+  for (size_t px = size_t(res.pixelsDone); px < npx; ++px) aov.depth[px] = kInfinity, aov.normal[px] = vec3(0.0f);
   return res;
 }
 
