@@ -340,7 +340,7 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   opts.interrupt = &gInterrupted;
   Stats::reset();
   if (deviceFlag == "vulkan") {
-    progress.clear();
+    progress.phase("building on Vulkan");
     return vk::renderCommand(scene, accelOpts, opts, f.out, f.aovs, f.heatmap, f.statsPath);
   }
   progress.phase(accelOpts.tessellate ? "pre-tessellating" : "building the acceleration structures");

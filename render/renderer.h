@@ -66,6 +66,9 @@ struct RenderOptions {
   // Set (by a SIGINT handler) to stop: tiles not yet started are skipped, the ones in
   // flight finish, and the result is marked partial.
   const std::atomic<bool>* interrupt = nullptr;
+  // --device vulkan: camera samples traced per band (0: the default, 2^18); the image
+  // does not depend on it.
+  size_t bandSamples = 0;
 };
 
 // Per-pixel outputs. Counters are the camera rays' traversal work, averaged over the

@@ -46,11 +46,13 @@ std::string slurp(const fs::path& p) {
 
 // Runs the oblong binary; `timeout` guards against a hang (exit status 124). Runs in
 // flight at the same time need distinct `id`s (their output files).
-Run runCli(const std::string& args, int id = 0) {
+// `env`: NAME=VALUE pairs for the child (e.g. its own TMPDIR).
+Run runCli(const std::string& args, int id = 0, const std::string& env = "") {
   const fs::path dir = test::scratchDir("bad_input_cli");
   const std::string o = (dir / fmt::format("stdout{}.txt", id)).string(),
                     e = (dir / fmt::format("stderr{}.txt", id)).string();
-  const std::string cmd = "timeout 60 " + std::string(OBLONG_BINARY) + " " + args + " >" + o + " 2>" + e;
+  const std::string cmd = "timeout 60 " + (env.empty() ? "" : "env " + env + " ") + std::string(OBLONG_BINARY) + " " +
+                          args + " >" + o + " 2>" + e;
   const int raw = std::system(cmd.c_str());
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(o), slurp(e)};
 }
@@ -554,14 +556,141 @@ TEST_CASE("bad input: a full device is an error, and no truncated file is left",
       "render --size 8x8 -q -o " + ok + " --heatmap " + full.string(),
       "trace --rays " + rays + " -o /dev/full",
   };
+  // A device is written through a temporary file in $TMPDIR: the child gets a folder of
+  // its own, so that other programs' files in the system's temporary folder do not count.
+  const fs::path tmp = dir / "tmp";
+  fs::create_directories(tmp);
   for (const std::string& args : cases) {
     fs::remove(ok);
-    checkOneLineError(runCli(args), args, {"write failed"});
+    checkOneLineError(runCli(args, 0, "TMPDIR=" + tmp.string()), args, {"write failed"});
   }
   CHECK(fs::is_symlink(full));  // written through, not replaced
   CHECK(fs::read_symlink(full) == "/dev/full");
   CHECK(leftovers(dir) == 0);
-  CHECK(leftovers(fs::temp_directory_path()) == 0);
+  CHECK(leftovers(tmp) == 0);
+}
+
+TEST_CASE("bad input: outputs that name the same file or an input are refused before any work", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_same_file");
+  const fs::path& fx = fixtures();  // quad.obj, map.png
+  fs::create_directories(dir / "sub");
+  const std::string D = dir.string() + "/";
+  for (const char* f : {"quad.obj", "map.png"}) fs::copy_file(fx / f, dir / f, fs::copy_options::overwrite_existing);
+  const std::string scene = R"({"meshes": [{"file": "quad.obj", "displacement": {"map": "map.png", "scale": 0.1}}]})";
+  write(dir / "scene.json", scene);
+  write(dir / "scene.png", scene);  // a scene file with an image's name
+  const std::string rays = rayFile(dir, "r.csv", "0,0,5,0,0,-1,0,inf");
+  fs::remove(dir / "link.png");
+  fs::create_symlink("x.png", dir / "link.png");  // dangling: x.png does not exist yet
+  struct C {
+    std::string args;
+    std::vector<std::string> expect;
+  };
+  const C cases[] = {
+      // Two outputs, one file, spelt differently.
+      {"render -q --size 8x8 -o " + D + "x.png --stats " + D + "./x.png", {"same file"}},
+      {"render -q --size 8x8 -o " + D + "x.png --heatmap " + D + "sub/../x.png", {"same file"}},
+      {"render -q --size 8x8 -o " + D + "x.png --heatmap " + D + "link.png", {"same file"}},
+      {"trace --rays " + rays + " -o " + D + "h.csv --stats " + D + "sub/../h.csv", {"same file"}},
+      // An output that is an input.
+      {"render " + D + "scene.png -q --size 8x8 -o " + D + "scene.png", {"input", "scene"}},
+      {"render " + D + "scene.json -q --size 8x8 -o " + D + "y.png --stats " + D + "scene.json", {"input", "scene"}},
+      {"render " + D + "scene.json -q --size 8x8 -o " + D + "y.png --stats " + D + "quad.obj", {"input", "mesh"}},
+      {"render " + D + "scene.json -q --size 8x8 -o " + D + "y.png --heatmap " + D + "sub/../map.png",
+       {"input", "displacement map"}},
+      {"trace --rays " + rays + " -o " + D + "r.csv", {"input", "--rays"}},
+      {"trace " + D + "scene.json --rays " + rays + " -o " + D + "h.csv --stats " + D + "quad.obj", {"input", "mesh"}},
+  };
+  for (const C& c : cases) checkOneLineError(runCli(c.args), c.args, c.expect);
+  // The same in a relative spelling, from the folder.
+  const std::string rel = "cd " + D + " && " + std::string(OBLONG_BINARY) +
+                          " render -q --size 8x8 -o x.png --stats ./x.png 2>" + D + "rel.txt";
+  CHECK(WEXITSTATUS(std::system(rel.c_str())) == 1);
+  CHECK_THAT(slurp(dir / "rel.txt"), Contains("same file"));
+  CHECK(!fs::exists(dir / "x.png"));
+  CHECK(!fs::exists(dir / "y.png"));
+  CHECK(!fs::exists(dir / "h.csv"));
+  CHECK(slurp(dir / "scene.json") == scene);
+  CHECK(slurp(dir / "scene.png") == scene);
+  CHECK(slurp(dir / "quad.obj") == slurp(fx / "quad.obj"));
+  CHECK(slurp(dir / "map.png") == slurp(fx / "map.png"));
+  CHECK(slurp(rays) == "ox,oy,oz,dx,dy,dz,tmin,tmax\n0,0,5,0,0,-1,0,inf\n");
+}
+
+TEST_CASE("bad input: link loops, special folders, empty values and misspelt commands are one line", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_paths");
+  const std::string D = dir.string() + "/";
+  for (const char* name : {"loop", "loop.png", "loop.exr", "loop.json"}) {
+    fs::remove(dir / name);
+    fs::create_symlink(name, dir / name);
+  }
+  const fs::path& fx = fixtures();
+  const std::string nul = D + "nul.json";
+  write(nul, R"({"meshes": [{"file": ")" + fx.string() + R"(/quad.obj\u0000.ply"}]})");
+  const std::string stepScene = D + "step.json";
+  write(stepScene, R"({"meshes": [{"file": ")" + fx.string() + R"(/quad.obj", "displacement": {"map": ")" +
+                       fx.string() + R"(/map.png", "scale": 0.1}}], "strategies": {"baseline": {"name": "fixedstep", "step": 1e-30}}})");
+  const std::string rays = rayFile(dir, "r.csv", "0,0,5,0,0,-1,0,inf");
+  const std::string png = D + "ok.png";
+  struct C {
+    std::string args;
+    std::vector<std::string> expect;
+  };
+  const C cases[] = {
+      {"trace --rays " + D + "loop -o " + D + "h.csv", {D + "loop", "loop of symbolic links"}},
+      {"render -q --size 8x8 -o " + png + " --stats " + D + "loop.json", {"loop.json", "loop of symbolic links"}},
+      {"render -q --size 8x8 -o " + png + " --aovs " + D + "loop.exr", {"loop.exr", "loop of symbolic links"}},
+      {"render -q --size 8x8 -o " + D + "loop.png", {"loop.png", "loop of symbolic links"}},
+      {"render " + D + "loop.json -q --size 8x8 -o " + png, {"loop.json", "loop of symbolic links"}},
+      {"bake -o " + D + "b.oblg --rays " + D + "loop", {D + "loop", "loop of symbolic links"}},
+      // A folder that access() calls writable but where no file can be made.
+      {"render -q --size 8x8 -o /proc/x.png", {"/proc/x.png", "cannot create a file"}},
+      // Empty values are mistakes, not the default.
+      {"render -q --size 8x8 --lod '' -o " + png, {"--lod", "empty value"}},
+      {"render -q --size 8x8 --range '' -o " + png, {"--range", "empty value"}},
+      {"info ''", {"scene", "empty file name"}},
+      {"trace --rays '' -o " + D + "h.csv", {"--rays", "empty value"}},
+      {"render -q --progress bogus --size 8x8 -o " + png, {"--progress", "bogus"}},
+      {"render -q --marching-scale 1e308 --size 8x8 -o " + png, {"--marching-scale", "1e+308"}},
+      {"bogus", {"unknown command 'bogus'"}},
+      {"info " + nul, {"NUL"}},
+      // Where a value came from: the scene's parameter, not a flag that was not given.
+      {"trace " + stepScene + " --rays " + rays + " -o " + D + "h.csv", {"strategies.baseline.step", "smallest texel"}},
+  };
+  for (const C& c : cases) {
+    const Run r = runCli(c.args);
+    checkOneLineError(r, c.args, c.expect);
+    CHECK(r.err.find(".oblong-") == std::string::npos);  // never the hidden temporary name
+    CHECK(r.err.find("internal error") == std::string::npos);
+  }
+  {
+    const Run r = runCli("trace " + stepScene + " --rays " + rays + " -o " + D + "h.csv");
+    CHECK(r.err.find("--step") == std::string::npos);
+  }
+  CHECK(!fs::exists(png));
+  CHECK(!fs::exists(dir / "h.csv"));
+}
+
+TEST_CASE("bad input: a closed or full standard error or output never ends the process", "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_streams");
+  const std::string D = dir.string() + "/", ob = std::string(OBLONG_BINARY);
+  auto status = [](const std::string& cmd) {
+    const int raw = std::system(("timeout 60 sh -c '" + cmd + "'").c_str());
+    return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  };
+  // Before: fmt::print threw out of the error handler, std::terminate, exit 134.
+  CHECK(status(ob + " info " + D + "missing.json 2>&-") == 1);
+  CHECK(status(ob + " render --bogus 2>/dev/full") == 1);
+  // A good render with progress lines on a full stderr is kept.
+  fs::remove(dir / "p.png");
+  CHECK(status(ob + " render --size 8x8 --progress always -o " + D + "p.png >/dev/null 2>/dev/full") == 0);
+  CHECK(fs::exists(dir / "p.png"));
+  fs::remove(dir / "p.png");
+  CHECK(status(ob + " render --size 8x8 --progress always -o " + D + "p.png >/dev/null 2>&-") == 0);
+  CHECK(fs::exists(dir / "p.png"));
+  // Lost standard output is an error (it was exit 0).
+  CHECK(status(ob + " info >/dev/full 2>" + D + "err.txt") == 1);
+  CHECK_THAT(slurp(dir / "err.txt"), Contains("standard output") && Contains("write failed"));
 }
 
 TEST_CASE("outputs: PFM, default names said, statistics of the run", "[bad_input][cli]") {

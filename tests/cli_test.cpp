@@ -210,7 +210,7 @@ TEST_CASE("oblong trace writes the first hit of every ray, CSV and binary alike"
   CHECK(j.at("memory_total").get<int64_t>() > 0);
 }
 
-TEST_CASE("oblong trace --baseline tfdm matches both oracles; a scene file can choose it", "[cli][trace][tfdm]") {
+TEST_CASE("oblong trace --baseline tfdm matches both oracles, and a scene file can choose it", "[cli][trace][tfdm]") {
   const auto dir = oblong::test::scratchDir("cli_trace_tfdm");
   const auto rays = someRays(300);
   const std::string csv = (dir / "rays.csv").string();

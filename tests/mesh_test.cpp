@@ -223,7 +223,7 @@ TEST_CASE("bad meshes give one-line errors naming the file", "[mesh]") {
   }
 }
 
-TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map; high: the reference)", "[mesh]") {
+TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map, high: the reference)", "[mesh]") {
   const std::string low = "/usr/share/glmark2/models/asteroid-low.3ds";
   const std::string high = "/usr/share/glmark2/models/asteroid-high.3ds";
   // Installed by the set-up script (glmark2-data): its absence is a broken set-up.
@@ -547,7 +547,7 @@ TEST_CASE("a PLY header claiming more than the file holds is refused before assi
   CHECK(loadMesh(writeFile("count3.ply", head + bytesOf(v, 36) + "\x03" + bytesOf(f, 12))).triangles.size() == 1);
 }
 
-TEST_CASE("PLY headers assimp would misread are refused; its quirks are worked around", "[mesh][bad_input]") {
+TEST_CASE("PLY headers assimp would misread are refused, and its quirks are worked around", "[mesh][bad_input]") {
   const std::string vertex = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
   const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
   const std::string data = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";

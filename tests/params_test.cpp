@@ -28,7 +28,7 @@ TEST_CASE("ParamSet reads typed values with defaults and rejects unused ones", "
   REQUIRE_THROWS_AS(ParamSet(nlohmann::json::array(), "g.json"), Error);
 }
 
-TEST_CASE("Registry creates by name; unknown names list the known ones", "[params]") {
+TEST_CASE("Registry creates by name, and unknown names list the known ones", "[params]") {
   Registry<Thing, Ctx> reg;
   reg.add("plus", [](ParamSet& p, const Ctx& c) {
     auto t = std::make_unique<Thing>();

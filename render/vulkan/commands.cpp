@@ -83,8 +83,13 @@ int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector
 
 int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOptions& ro, const std::string& out,
                   const std::string& aovs, const std::string& heatmap, const std::string& statsPath) {
+  checkRenderFits(ro);
   VulkanScene vs(scene, opts);
+  if (ro.progress)
+    ro.progress->phase(fmt::format("rendering {}x{} at {} spp on Vulkan", ro.size.x, ro.size.y, ro.spp),
+                       int64_t(ro.size.x) * ro.size.y);
   const RenderResult res = render(scene, vs, ro);
+  if (ro.progress) ro.progress->clear();
   if (res.partial) eprint("oblong: interrupted: writing the {} of {} pixels rendered (the rest is black)\n",
                           res.pixelsDone, int64_t(ro.size.x) * ro.size.y);
   writeImage(res.aov.color, out);

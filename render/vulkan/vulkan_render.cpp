@@ -21,6 +21,7 @@ constexpr size_t kBytesPerPixel = sizeof(vec3) + sizeof(RayCounters);
 // Samples traced per band: large enough to fill a GPU, small enough to bound memory
 // (~256 MiB) and to answer Ctrl-C within one band.
 constexpr size_t kBandSamples = size_t(1) << 18;
+constexpr size_t kMinBandSamples = size_t(1) << 10;
 
 struct Shader {
   const Scene& scene;
@@ -42,6 +43,26 @@ struct Path {
 
 }  // namespace
 
+// Samples per band: the requested (or default) band, smaller where the memory budget
+// left after the per-pixel buffers is smaller, never below kMinBandSamples.
+size_t bandSamples(const RenderOptions& opts) {
+  const size_t npx = size_t(std::max(opts.size.x, 0)) * size_t(std::max(opts.size.y, 0));
+  const size_t ns = npx * size_t(std::max(opts.spp, 1));
+  const size_t budget = structureBudgetBytes(), pixels = npx * kBytesPerPixel;
+  const size_t fit = budget > pixels ? (budget - pixels) / kBytesPerSample : 0;
+  const size_t asked = opts.bandSamples > 0 ? opts.bandSamples : kBandSamples;
+  return std::max<size_t>(1, std::min({ns, asked, std::max(fit, kMinBandSamples)}));
+}
+
+void checkRenderFits(const RenderOptions& opts) {
+  const size_t npx = size_t(std::max(opts.size.x, 0)) * size_t(std::max(opts.size.y, 0));
+  const size_t band = std::min(bandSamples(opts), kMinBandSamples);
+  checkFits("--device vulkan", "rendering on Vulkan", npx * kBytesPerPixel + band * kBytesPerSample,
+            "choose a smaller --size",
+            fmt::format("{} pixels at {} bytes and at least {} samples in flight at {} bytes", npx, kBytesPerPixel,
+                        band, kBytesPerSample));
+}
+
 RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions& opts) {
   if (opts.size.x <= 0 || opts.size.y <= 0) fail("render", "image size must be positive");
   if (opts.spp <= 0) fail("--spp", "must be >= 1, got {}", opts.spp);
@@ -51,11 +72,8 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
   // at most kBandSamples, in sample order, so any --size and --spp render in bounded
   // memory, and Ctrl-C is taken between bands. Each sample's path depends on its own
   // random stream only, so the image does not depend on the banding.
-  const size_t band = std::min(ns, kBandSamples);
-  checkFits("--device vulkan", "rendering on Vulkan", npx * kBytesPerPixel + band * kBytesPerSample,
-            "choose a smaller --size",
-            fmt::format("{} pixels at {} bytes and {} samples in flight at {} bytes", npx, kBytesPerPixel, band,
-                        kBytesPerSample));
+  checkRenderFits(opts);
+  const size_t band = bandSamples(opts);
   RenderResult res;
   AOVs& aov = res.aov;
   aov.allocate(opts.size);
@@ -242,6 +260,7 @@ RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions&
     }
     const size_t next = std::min(ns, done + band);
     renderBand(done, next);
+    if (opts.progress) opts.progress->add(int64_t(next / size_t(spp)) - int64_t(done / size_t(spp)));
     done = next;
   }
   // Pixels whose every sample was traced; the rest stay black when interrupted.

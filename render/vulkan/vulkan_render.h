@@ -11,6 +11,12 @@
 namespace oblong::vk {
 
 // Same pixels, samples, integrators, AOVs and counters as oblong::render.
+// Samples go in bands (RenderOptions::bandSamples) so that host memory stays bounded;
+// Ctrl-C (RenderOptions::interrupt) is taken between bands: the pixels whose samples were
+// all traced are kept, the result is marked partial.
 RenderResult render(const Scene& scene, VulkanScene& accel, const RenderOptions& opts);
+
+// Throws oblong::Error, before any work, when the host memory render() needs does not fit.
+void checkRenderFits(const RenderOptions& opts);
 
 }  // namespace oblong::vk
