@@ -454,9 +454,9 @@ TEST_CASE("every scene shipped in scenes/ loads with its meshes and maps", "[sce
     INFO(name);
     seen.insert(name);
     if (name == "terrain.json" && !fs::exists(root / "data/jacksboro_fault_dem.png"))
-      FAIL("scenes/data/jacksboro_fault_dem.png is missing: run scripts/setup.sh (it converts the DEM)");
+      FAIL("scenes/data/jacksboro_fault_dem.png is missing: the build makes it (target scene_data, scripts/scene_data.sh)");
     if (name.rfind("paper/", 0) == 0 && !fs::exists(root / "data/paper"))
-      FAIL("scenes/data/paper/ is missing: run scripts/setup.sh (it generates the paper-scale maps)");
+      FAIL("scenes/data/paper/ is missing: the build makes them (target scene_data, scripts/scene_data.sh)");
     Scene s;
     REQUIRE_NOTHROW(s = loadScene(entry.path().string()));
     CHECK(!s.lights.empty());
