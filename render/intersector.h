@@ -14,9 +14,11 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include <memory>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -87,7 +89,13 @@ struct TraversalConfig {
   // The scene file the choices come from ("" when built in code): errors about unknown
   // names and parameters name it.
   std::string source;
-  std::string where(const std::string& slot) const { return source.empty() ? slot : source + ": " + slot; }
+  // Slots ("strategies.range", ...) whose choice a command-line flag made, with the flag:
+  // errors about them name the flag, not the scene file.
+  std::map<std::string, std::string> flags;
+  std::string where(const std::string& slot) const {
+    if (const auto f = flags.find(slot); f != flags.end()) return f->second;
+    return source.empty() ? slot : source + ": " + slot;
+  }
 };
 
 class Intersector {

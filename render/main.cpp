@@ -200,14 +200,16 @@ struct StrategyFlags {
     o.traversal = traversalConfigOf(scene);
     TraversalConfig& c = o.traversal;
     // A flag naming another strategy than the scene's drops the scene's parameters for it.
-    auto pick = [](std::string& name, nlohmann::json& params, const std::string& flag) {
-      if (flag.empty() || flag == name) return;
-      name = flag;
+    auto pick = [&c](std::string& name, nlohmann::json& params, const std::string& value, const char* slot,
+                     const char* flag) {
+      if (value.empty() || value == name) return;
+      name = value;
       params = nlohmann::json::object();
+      c.flags[slot] = flag;
     };
-    pick(c.range, c.rangeParams, range);
-    pick(c.inverter, c.inverterParams, inverter);
-    pick(c.splitter, c.splitterParams, splitter);
+    pick(c.range, c.rangeParams, range, "strategies.range", "--range");
+    pick(c.inverter, c.inverterParams, inverter, "strategies.inverter", "--inverter");
+    pick(c.splitter, c.splitterParams, splitter, "strategies.splitter", "--splitter");
     if (marchingScale) {
       if (!(*marchingScale >= kMinMarchingScale) || !(*marchingScale <= kMaxFloat))
         fail("--marching-scale",
@@ -220,6 +222,7 @@ struct StrategyFlags {
     if (!baseline.empty() && baseline != c.baseline) {
       c.baseline = baseline;
       c.baselineParams = nlohmann::json::object();
+      c.flags["strategies.baseline"] = "--baseline";
     }
     if (step) {
       if (!(*step > 0) || !(*step <= kMaxFloat))

@@ -630,6 +630,9 @@ TEST_CASE("bad input: link loops, special folders, empty values and misspelt com
   const std::string stepScene = D + "step.json";
   write(stepScene, R"({"meshes": [{"file": ")" + fx.string() + R"(/quad.obj", "displacement": {"map": ")" +
                        fx.string() + R"(/map.png", "scale": 0.1}}], "strategies": {"baseline": {"name": "fixedstep", "step": 1e-30}}})");
+  const std::string plain = D + "plain.json";
+  write(plain, R"({"meshes": [{"file": ")" + fx.string() + R"(/quad.obj", "displacement": {"map": ")" + fx.string() +
+                   R"(/map.png", "scale": 0.1}}]})");
   const std::string rays = rayFile(dir, "r.csv", "0,0,5,0,0,-1,0,inf");
   const std::string png = D + "ok.png";
   struct C {
@@ -666,6 +669,13 @@ TEST_CASE("bad input: link loops, special folders, empty values and misspelt com
   {
     const Run r = runCli("trace " + stepScene + " --rays " + rays + " -o " + D + "h.csv");
     CHECK(r.err.find("--step") == std::string::npos);
+  }
+  // And the reverse: a flag's value is blamed on the flag, not on the scene file.
+  for (const std::string flag : {"--range", "--inverter", "--splitter"}) {
+    const std::string args = "render " + plain + " -q --size 8x8 -o " + png + " " + flag + " nosuch";
+    const Run r = runCli(args);
+    checkOneLineError(r, args, {"oblong: " + flag + ": unknown strategy 'nosuch'"});
+    CHECK(r.err.find("plain.json") == std::string::npos);
   }
   CHECK(!fs::exists(png));
   CHECK(!fs::exists(dir / "h.csv"));
