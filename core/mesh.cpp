@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include "core/error.h"
+#include "core/mesh_check.h"
 #include "core/ply_check.h"
 
 #include <assimp/Importer.hpp>
@@ -9,6 +10,7 @@
 #include <assimp/scene.h>
 #include <fmt/format.h>
 #include <glm/gtc/matrix_inverse.hpp>
+#include <pthread.h>
 
 #include <algorithm>
 #include <bit>
@@ -16,6 +18,7 @@
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -174,6 +177,42 @@ float unflipV(float flipped) {
   return naive;
 }
 
+// assimp recurses once per level of a file's nesting (checkMeshNesting bounds the levels
+// of the formats it can measure). The load runs on a thread of its own with a stack that
+// holds kMaxMeshNesting levels many times over, whichever thread calls and however large
+// the sanitizers make the frames.
+constexpr size_t kLoaderStack = size_t(64) << 20;
+
+template <typename F>
+auto onLargeStack(F&& f) -> decltype(f()) {
+  using R = decltype(f());
+  struct Job {
+    F* f;
+    std::optional<R> result;
+    std::exception_ptr error;
+  } job{&f, {}, {}};
+  void* (*run)(void*) = [](void* p) -> void* {
+    Job& j = *static_cast<Job*>(p);
+    try {
+      j.result.emplace((*j.f)());
+    } catch (...) {
+      j.error = std::current_exception();
+    }
+    return nullptr;
+  };
+  pthread_attr_t attr;
+  pthread_t thread;
+  bool started = pthread_attr_init(&attr) == 0;
+  if (started) {
+    started = pthread_attr_setstacksize(&attr, kLoaderStack) == 0 && pthread_create(&thread, &attr, run, &job) == 0;
+    pthread_attr_destroy(&attr);
+  }
+  if (!started) return f();  // no thread to be had: load on this one
+  pthread_join(thread, nullptr);
+  if (job.error) std::rethrow_exception(job.error);
+  return std::move(*job.result);
+}
+
 }  // namespace
 
 void computeSmoothNormals(Mesh& m) {
@@ -307,14 +346,12 @@ void recentreMesh(Mesh& m) {
   for (vec3& p : m.positions) p = vec3(dvec3(p) - moved);
 }
 
-Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) fail(path, "file not found");
-  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+namespace {
 
+Mesh loadMeshHere(const std::string& path, const MeshLoadOptions& opts) {
   Assimp::Importer importer;
   const PlyCheck ply = checkPly(path, importer);
+  checkMeshNesting(path, importer);
   // ValidateDataStructure: indices out of range and the like become an error instead of
   // reaching the post-processing steps.
   constexpr unsigned kFlags = aiProcess_ValidateDataStructure | aiProcess_Triangulate |
@@ -386,6 +423,16 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
   }
   finishMesh(m, opts);
   return m;
+}
+
+}  // namespace
+
+Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) fail(path, "file not found");
+  if (!fs::is_regular_file(path, ec)) fail(path, "not a regular file");
+  return onLargeStack([&] { return loadMeshHere(path, opts); });
 }
 
 }  // namespace oblong
