@@ -4,6 +4,7 @@
 #include "core/mesh_check.h"
 #include "core/ply_check.h"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/importerdesc.h>
 #include <assimp/postprocess.h>
@@ -11,6 +12,7 @@
 #include <fmt/format.h>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <pthread.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <bit>
@@ -176,6 +178,28 @@ float unflipV(float flipped) {
   }
   return naive;
 }
+
+// Every file a mesh pulls in (an OBJ's material library, a glTF's buffers) goes through
+// this: one that exists but is not a regular file is refused, since assimp's fopen would
+// block on a FIFO (in Exists as well as Open) and read a device forever. The refusal is
+// kept for loadMesh to report; missing files are left to assimp as before.
+class RegularFilesOnly : public Assimp::DefaultIOSystem {
+ public:
+  bool Exists(const char* file) const override { return allowed(file) && DefaultIOSystem::Exists(file); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    return allowed(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
+  }
+  const std::string& refused() const { return refused_; }
+
+ private:
+  bool allowed(const char* file) const {
+    struct stat st;
+    if (!file || ::stat(file, &st) != 0 || S_ISREG(st.st_mode)) return true;
+    if (refused_.empty()) refused_ = file;
+    return false;
+  }
+  mutable std::string refused_;
+};
 
 // assimp recurses once per level of a file's nesting (checkMeshNesting bounds the levels
 // of the formats it can measure). The load runs on a thread of its own with a stack that
@@ -350,6 +374,8 @@ namespace {
 
 Mesh loadMeshHere(const std::string& path, const MeshLoadOptions& opts) {
   Assimp::Importer importer;
+  auto* io = new RegularFilesOnly;
+  importer.SetIOHandler(io);  // the importer owns it
   const PlyCheck ply = checkPly(path, importer);
   checkMeshNesting(path, importer);
   // ValidateDataStructure: indices out of range and the like become an error instead of
@@ -368,6 +394,7 @@ Mesh loadMeshHere(const std::string& path, const MeshLoadOptions& opts) {
   } else {
     scene = importer.ReadFile(path, kFlags);
   }
+  if (!io->refused().empty()) fail(path, "{}: not a regular file", io->refused());
   if (!scene) {
     std::string err = importer.GetErrorString();
     // ReadFileFromMemory names the copy AI_MEMORYIO_MAGIC_FILENAME + ".ply".

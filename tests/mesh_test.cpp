@@ -14,6 +14,8 @@
 #include <set>
 #include <tuple>
 
+#include <sys/stat.h>
+
 using namespace oblong;
 using Catch::Matchers::Contains;
 
@@ -738,6 +740,22 @@ TEST_CASE("node hierarchies deeper than 1000 levels are refused before assimp re
                        Catch::Matchers::Message(dae + ": cannot load mesh (XML <node> elements nested 20000 levels "
                                                       "deep; at most 1000 are supported, as assimp reads each level "
                                                       "recursively)"));
+}
+
+TEST_CASE("every file a mesh pulls in must be a regular file; a FIFO is refused before it is opened", "[mesh][bad_input]") {
+  const auto dir = test::scratchDir("mesh");
+  const std::string fifo = (dir / "pulled.fifo").string();
+  if (!std::filesystem::exists(fifo)) REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  // Both blocked forever in assimp's fopen.
+  const auto obj = writeFile("fifo_mtl.obj", "mtllib pulled.fifo\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+  CHECK_THROWS_MATCHES(loadMesh(obj), Error, Catch::Matchers::Message(obj + ": " + fifo + ": not a regular file"));
+  const auto gltf = writeFile("fifo_buffer.gltf", quadGltfJson("pulled.fifo"));
+  CHECK_THROWS_MATCHES(loadMesh(gltf), Error, Catch::Matchers::Message(gltf + ": " + fifo + ": not a regular file"));
+  // A missing material library is still only a warning of assimp's; a regular buffer file loads.
+  CHECK(loadMesh(writeFile("missing_mtl.obj", "mtllib nosuch.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"))
+            .triangles.size() == 1);
+  std::ofstream(dir / "quad.bin", std::ios::binary) << quadBuffer();
+  CHECK(loadMesh(writeFile("file_buffer.gltf", quadGltfJson("quad.bin"))).triangles.size() == 2);
 }
 
 TEST_CASE("GLB chunk lengths beyond the end of the file are refused before assimp allocates them",
