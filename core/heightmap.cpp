@@ -7,12 +7,15 @@
 
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 
 namespace oblong {
 
@@ -126,11 +129,109 @@ void checkPixelsFit(const std::string& path, OIIO::ImageInput& in, const OIIO::I
          "file can hold ({})",
          spec.width, spec.height, raw, bits, size, format, compression.empty() ? "" : " ", compression, why);
 }
+
+// PNG chunks and EXR header attributes carry their own lengths, and libpng (a zTXt
+// chunk) and OpenEXR (a string attribute) allocate that much before they read it: a
+// 2 KiB file claiming 2 GiB takes 2 GiB. Both are walked here, by their magic numbers
+// (OpenImageIO tries every reader whatever the extension), and a length that runs past
+// the end of the file is refused before OpenImageIO opens it. What else is wrong with
+// the file is left to the readers.
+class Bytes {
+ public:
+  explicit Bytes(const std::string& path) : in_(path, std::ios::binary) {
+    in_.seekg(0, std::ios::end);
+    size_ = in_ ? uint64_t(in_.tellg()) : 0;
+  }
+  uint64_t size() const { return size_; }
+  bool read(uint64_t at, void* dst, size_t n) {  // false past the end
+    if (at > size_ || n > size_ - at) return false;
+    in_.clear();
+    in_.seekg(std::streamoff(at));
+    in_.read(static_cast<char*>(dst), std::streamsize(n));
+    return in_.gcount() == std::streamsize(n);
+  }
+  // A NUL-terminated name of at most `max` characters at `at`; nullopt if there is none.
+  std::optional<std::string> name(uint64_t at, size_t max) {
+    std::string s;
+    for (char c; s.size() <= max && read(at + s.size(), &c, 1);) {
+      if (c == '\0') return s;
+      s += c;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::ifstream in_;
+  uint64_t size_ = 0;
+};
+
+std::string printable(std::string s) {
+  for (char& c : s)
+    if (!std::isprint((unsigned char)c)) c = '?';
+  return s;
+}
+
+void checkPngChunks(const std::string& path, Bytes& f) {
+  // Signature, then chunks: length (big-endian, at most 2^31 - 1), type, data, CRC.
+  for (uint64_t at = 8; at + 8 <= f.size();) {
+    unsigned char h[8];
+    f.read(at, h, 8);
+    const uint32_t length = uint32_t(h[0]) << 24 | uint32_t(h[1]) << 16 | uint32_t(h[2]) << 8 | h[3];
+    const std::string type = printable(std::string(reinterpret_cast<const char*>(h + 4), 4));
+    const uint64_t left = f.size() - at - 8;
+    if (uint64_t(length) + 4 > left)
+      fail(path, "PNG chunk '{}' at byte {} claims {} bytes, more than the {} bytes left in the file", type, at,
+           length, left >= 4 ? left - 4 : 0);
+    if (type == "IEND") break;
+    at += 12 + uint64_t(length);
+  }
+}
+
+void checkExrHeader(const std::string& path, Bytes& f) {
+  // Magic, version and flags, then each header: attributes (name NUL, type NUL, int32
+  // size, value) up to an empty name; a multi-part file has headers up to an empty one.
+  unsigned char v[4];
+  if (!f.read(4, v, 4)) return;
+  const bool longNames = v[1] & 0x04, multipart = v[1] & 0x10;
+  const size_t maxName = longNames ? 255 : 31;
+  uint64_t at = 8;
+  for (bool more = true; more;) {
+    for (;;) {
+      const auto name = f.name(at, maxName);
+      if (!name) return;
+      at += name->size() + 1;
+      if (name->empty()) break;
+      const auto type = f.name(at, maxName);
+      if (!type) return;
+      at += type->size() + 1;
+      unsigned char b[4];
+      if (!f.read(at, b, 4)) return;
+      at += 4;
+      const int32_t size = int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+      const uint64_t left = f.size() - at;
+      if (size < 0 || uint64_t(size) > left)
+        fail(path, "EXR header attribute '{}' ({}) at byte {} claims {} bytes, more than the {} bytes left in the file",
+             printable(*name), printable(*type), at - 4 - type->size() - 1 - name->size() - 1, size, left);
+      at += uint64_t(size);
+    }
+    char c = 0;
+    more = multipart && f.read(at, &c, 1) && c != '\0';
+  }
+}
+
+void checkLengths(const std::string& path) {
+  Bytes f(path);
+  unsigned char magic[8] = {};
+  if (!f.read(0, magic, 8)) return;
+  if (std::memcmp(magic, "\x89PNG\r\n\x1a\n", 8) == 0) checkPngChunks(path, f);
+  else if (std::memcmp(magic, "\x76\x2f\x31\x01", 4) == 0) checkExrHeader(path, f);
+}
 }  // namespace
 
 HeightMap HeightMap::load(const std::string& path, bool flipV) {
   // Checked first: OpenImageIO would block on a FIFO or read a device forever.
   checkInputFile(path);
+  checkLengths(path);
   StderrCapture capture;
   // Unassociated: OpenImageIO would otherwise multiply the first channel of a grey+alpha
   // PNG (or TIFF) by its alpha, and the heights with it.

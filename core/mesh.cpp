@@ -2,14 +2,18 @@
 
 #include "core/error.h"
 #include "core/input_file.h"
+#include "core/mesh_check.h"
 #include "core/ply_check.h"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/importerdesc.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
 #include <glm/gtc/matrix_inverse.hpp>
+#include <pthread.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <bit>
@@ -17,6 +21,7 @@
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -175,6 +180,64 @@ float unflipV(float flipped) {
   return naive;
 }
 
+// Every file a mesh pulls in (an OBJ's material library, a glTF's buffers) goes through
+// this: one that exists but is not a regular file is refused, since assimp's fopen would
+// block on a FIFO (in Exists as well as Open) and read a device forever. The refusal is
+// kept for loadMesh to report; missing files are left to assimp as before.
+class RegularFilesOnly : public Assimp::DefaultIOSystem {
+ public:
+  bool Exists(const char* file) const override { return allowed(file) && DefaultIOSystem::Exists(file); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    return allowed(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
+  }
+  const std::string& refused() const { return refused_; }
+
+ private:
+  bool allowed(const char* file) const {
+    struct stat st;
+    if (!file || ::stat(file, &st) != 0 || S_ISREG(st.st_mode)) return true;
+    if (refused_.empty()) refused_ = file;
+    return false;
+  }
+  mutable std::string refused_;
+};
+
+// assimp recurses once per level of a file's nesting (checkMeshNesting bounds the levels
+// of the formats it can measure). The load runs on a thread of its own with a stack that
+// holds kMaxMeshNesting levels many times over, whichever thread calls and however large
+// the sanitizers make the frames.
+constexpr size_t kLoaderStack = size_t(64) << 20;
+
+template <typename F>
+auto onLargeStack(F&& f) -> decltype(f()) {
+  using R = decltype(f());
+  struct Job {
+    F* f;
+    std::optional<R> result;
+    std::exception_ptr error;
+  } job{&f, {}, {}};
+  void* (*run)(void*) = [](void* p) -> void* {
+    Job& j = *static_cast<Job*>(p);
+    try {
+      j.result.emplace((*j.f)());
+    } catch (...) {
+      j.error = std::current_exception();
+    }
+    return nullptr;
+  };
+  pthread_attr_t attr;
+  pthread_t thread;
+  bool started = pthread_attr_init(&attr) == 0;
+  if (started) {
+    started = pthread_attr_setstacksize(&attr, kLoaderStack) == 0 && pthread_create(&thread, &attr, run, &job) == 0;
+    pthread_attr_destroy(&attr);
+  }
+  if (!started) return f();  // no thread to be had: load on this one
+  pthread_join(thread, nullptr);
+  if (job.error) std::rethrow_exception(job.error);
+  return std::move(*job.result);
+}
+
 }  // namespace
 
 void computeSmoothNormals(Mesh& m) {
@@ -308,11 +371,14 @@ void recentreMesh(Mesh& m) {
   for (vec3& p : m.positions) p = vec3(dvec3(p) - moved);
 }
 
-Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
-  checkInputFile(path);
+namespace {
 
+Mesh loadMeshHere(const std::string& path, const MeshLoadOptions& opts) {
   Assimp::Importer importer;
+  auto* io = new RegularFilesOnly;
+  importer.SetIOHandler(io);  // the importer owns it
   const PlyCheck ply = checkPly(path, importer);
+  checkMeshNesting(path, importer);
   // ValidateDataStructure: indices out of range and the like become an error instead of
   // reaching the post-processing steps.
   constexpr unsigned kFlags = aiProcess_ValidateDataStructure | aiProcess_Triangulate |
@@ -329,6 +395,7 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
   } else {
     scene = importer.ReadFile(path, kFlags);
   }
+  if (!io->refused().empty()) fail(path, "{}: not a regular file", io->refused());
   if (!scene) {
     std::string err = importer.GetErrorString();
     // ReadFileFromMemory names the copy AI_MEMORYIO_MAGIC_FILENAME + ".ply".
@@ -384,6 +451,13 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
   }
   finishMesh(m, opts);
   return m;
+}
+
+}  // namespace
+
+Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts) {
+  checkInputFile(path);
+  return onLargeStack([&] { return loadMeshHere(path, opts); });
 }
 
 }  // namespace oblong

@@ -51,8 +51,9 @@ struct MeshLoadOptions {
 // are normalised; when the file has none, area-weighted smooth normals are computed,
 // accumulated per position so that uv seams do not split the normal. Texture
 // coordinates are as the file stores them (assimp's v flip for glTF and others is
-// undone). A PLY file is checked against its header before assimp reads it. Errors name
-// the file.
+// undone). A PLY file is checked against its header, and node hierarchies and other
+// nesting against kMaxMeshNesting (core/mesh_check.h), before assimp reads the file; the
+// load runs on a thread with a large stack. Errors name the file.
 Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts = {});
 
 // The checks every mesh goes through (loaded or generated), in this order: triangles

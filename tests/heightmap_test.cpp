@@ -200,3 +200,47 @@ TEST_CASE("a header claiming more pixels than the file can hold is refused befor
   INFO(std::filesystem::file_size(flat) << " bytes");
   CHECK(HeightMap::load(flat).atUnchecked(2047, 2047) == Approx(0.25f).margin(0.5 / 255));
 }
+
+TEST_CASE("PNG chunks and EXR attributes claiming more than the file holds are refused before allocating",
+          "[heightmap][bad_input]") {
+  const auto dir = test::scratchDir("heightmap_lengths");
+  // A zTXt chunk claiming 0x7FFFFFF0 bytes in a 2 KB PNG: libpng allocated 2.2 GB first.
+  const std::string one = (dir / "one.png").string();
+  test::writeGray(one, 1, 1, {0.5f}, OIIO::TypeDesc::UINT8);
+  std::string png = slurp(one);
+  REQUIRE(png.compare(12, 4, "IHDR") == 0);  // 25 bytes from byte 8: the next chunk starts at 33
+  png.insert(33, be32(0x7FFFFFF0) + "zTXt" + "k" + std::string(2, '\0') + std::string(2000, 'x'));
+  const std::string ztxt = (dir / "ztxt.png").string();
+  std::ofstream(ztxt, std::ios::binary) << png;
+  CHECK_THROWS_MATCHES(HeightMap::load(ztxt), Error,
+                       Catch::Matchers::Message(ztxt + ": PNG chunk 'zTXt' at byte 33 claims 2147483632 bytes, more "
+                                                       "than the " +
+                                                std::to_string(png.size() - 33 - 12) + " bytes left in the file"));
+  // Whatever the extension: OpenImageIO finds the PNG by its signature.
+  const std::string dat = (dir / "ztxt.dat").string();
+  std::ofstream(dat, std::ios::binary) << png;
+  CHECK_THROWS_WITH(HeightMap::load(dat), Catch::Contains(dat + ": PNG chunk 'zTXt' at byte 33 claims"));
+
+  // A string attribute claiming 0x7FFFFFF0 bytes in a 17 KB EXR: OpenEXR allocated 2.2 GB first.
+  const std::string exr = (dir / "ok.exr").string();
+  test::writeGray(exr, 8, 8, std::vector<float>(64, 0.5f), OIIO::TypeDesc::FLOAT);
+  std::string bytes = slurp(exr);
+  REQUIRE(HeightMap::load(exr).width() == 8);
+  const int32_t lie = 0x7FFFFFF0;
+  bytes.insert(8, std::string("comments\0string\0", 16) + std::string(reinterpret_cast<const char*>(&lie), 4) + "hi");
+  bytes += std::string(17000, '\0');
+  const std::string liar = (dir / "liar.exr").string();
+  std::ofstream(liar, std::ios::binary) << bytes;
+  CHECK_THROWS_MATCHES(HeightMap::load(liar), Error,
+                       Catch::Matchers::Message(liar + ": EXR header attribute 'comments' (string) at byte 8 claims "
+                                                       "2147483632 bytes, more than the " +
+                                                std::to_string(bytes.size() - 28) + " bytes left in the file"));
+  // A negative size is no size either.
+  bytes = slurp(exr);
+  const int32_t negative = -5;
+  bytes.insert(8, std::string("comments\0string\0", 16) + std::string(reinterpret_cast<const char*>(&negative), 4));
+  const std::string neg = (dir / "negative.exr").string();
+  std::ofstream(neg, std::ios::binary) << bytes;
+  CHECK_THROWS_WITH(HeightMap::load(neg), Catch::Contains(neg + ": EXR header attribute 'comments' (string) at byte 8 "
+                                                                "claims -5 bytes"));
+}

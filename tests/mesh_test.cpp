@@ -4,6 +4,7 @@
 #include "test_util.h"
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <filesystem>
@@ -12,6 +13,8 @@
 #include <map>
 #include <set>
 #include <tuple>
+
+#include <sys/stat.h>
 
 using namespace oblong;
 using Catch::Matchers::Contains;
@@ -664,4 +667,121 @@ TEST_CASE("a mesh far from the origin gets its own frame: same positions whereve
   recentreMesh(near0);  // already around the origin: unchanged
   CHECK(near0.origin == vec3(0.0f));
   CHECK(near0.positions == base.positions);
+}
+
+namespace {
+
+// The quad's glTF with its mesh at the end of a chain of `levels` nodes; `extra` is
+// appended to the node list (more nodes, or a node that closes a cycle).
+std::string chainGltfJson(int levels, const std::string& extra = "") {
+  std::string nodes;
+  for (int k = 0; k + 1 < levels; ++k) nodes += fmt::format(R"({{"children": [{}]}}, )", k + 1);
+  nodes += R"({"mesh": 0})" + extra;
+  std::string json = quadGltfJson("data:application/octet-stream;base64," + test::base64(quadBuffer()));
+  const std::string one = R"("nodes": [{"mesh": 0}])";
+  json.replace(json.find(one), one.size(), R"("nodes": [)" + nodes + "]");
+  return json;
+}
+
+// COLLADA of one triangle instanced at the end of `levels` nested <node> elements.
+std::string chainDae(int levels) {
+  std::string s =
+      R"(<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<library_geometries><geometry id="g"><mesh>
+<source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
+<technique_common><accessor source="#pa" count="3" stride="3"><param name="X" type="float"/>
+<param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+<vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+<triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
+</mesh></geometry></library_geometries>
+<library_visual_scenes><visual_scene id="s">)";
+  for (int k = 0; k < levels; ++k) s += "<node>";
+  s += R"(<instance_geometry url="#g"/>)";
+  for (int k = 0; k < levels; ++k) s += "</node>";
+  return s + R"(</visual_scene></library_visual_scenes>
+<scene><instance_visual_scene url="#s"/></scene></COLLADA>
+)";
+}
+
+std::string glbOf(std::string json, const std::string& binChunk) {
+  while (json.size() % 4) json += ' ';
+  auto u32 = [](uint32_t v) { return bytesOf(&v, 4); };
+  const std::string body = u32(uint32_t(json.size())) + "JSON" + json + binChunk;
+  return "glTF" + u32(2) + u32(uint32_t(12 + body.size())) + body;
+}
+
+}  // namespace
+
+TEST_CASE("node hierarchies deeper than 1000 levels are refused before assimp recurses into them",
+          "[mesh][bad_input]") {
+  // 20 000 levels overflowed assimp's recursion (exit 139); 1000 load.
+  CHECK(loadMesh(writeFile("chain1000.gltf", chainGltfJson(1000))).triangles.size() == 2);
+  const auto gltf = writeFile("chain20000.gltf", chainGltfJson(20000));
+  CHECK_THROWS_MATCHES(loadMesh(gltf), Error,
+                       Catch::Matchers::Message(gltf + ": cannot load mesh (glTF nodes (from node 0) nested 20000 "
+                                                       "levels deep; at most 1000 are supported, as assimp reads each "
+                                                       "level recursively)"));
+  const auto glb = writeFile("chain20000.glb", glbOf(chainGltfJson(20000), ""));
+  CHECK_THROWS_WITH(loadMesh(glb), Contains(glb + ": cannot load mesh (glTF nodes (from node 0) nested 20000 levels"));
+  // A node among its own descendants would recurse forever.
+  const auto cycle = writeFile("cycle.gltf", chainGltfJson(3, R"(, {"children": [4]}, {"children": [3]})"));
+  CHECK_THROWS_WITH(loadMesh(cycle), Contains(cycle + ": cannot load mesh (glTF node 3 is among its own descendants)"));
+  // Nested JSON arrays (RapidJSON parses them recursively).
+  std::string deepJson = chainGltfJson(1);
+  deepJson.insert(deepJson.rfind('}'), R"(, "extras": )" + std::string(5000, '[') + std::string(5000, ']'));
+  const auto arrays = writeFile("arrays.gltf", deepJson);
+  CHECK_THROWS_WITH(loadMesh(arrays), Contains(arrays + ": cannot load mesh (glTF JSON arrays and objects nested 5001 "
+                                                        "levels deep"));
+
+  CHECK(loadMesh(writeFile("chain1000.dae", chainDae(1000))).triangles.size() == 1);
+  const auto dae = writeFile("chain20000.dae", chainDae(20000));
+  CHECK_THROWS_MATCHES(loadMesh(dae), Error,
+                       Catch::Matchers::Message(dae + ": cannot load mesh (XML <node> elements nested 20000 levels "
+                                                      "deep; at most 1000 are supported, as assimp reads each level "
+                                                      "recursively)"));
+}
+
+TEST_CASE("every file a mesh pulls in must be a regular file; a FIFO is refused before it is opened", "[mesh][bad_input]") {
+  const auto dir = test::scratchDir("mesh");
+  const std::string fifo = (dir / "pulled.fifo").string();
+  if (!std::filesystem::exists(fifo)) REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  // Both blocked forever in assimp's fopen.
+  const auto obj = writeFile("fifo_mtl.obj", "mtllib pulled.fifo\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+  CHECK_THROWS_MATCHES(loadMesh(obj), Error, Catch::Matchers::Message(obj + ": " + fifo + ": not a regular file"));
+  const auto gltf = writeFile("fifo_buffer.gltf", quadGltfJson("pulled.fifo"));
+  CHECK_THROWS_MATCHES(loadMesh(gltf), Error, Catch::Matchers::Message(gltf + ": " + fifo + ": not a regular file"));
+  // A missing material library is still only a warning of assimp's; a regular buffer file loads.
+  CHECK(loadMesh(writeFile("missing_mtl.obj", "mtllib nosuch.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"))
+            .triangles.size() == 1);
+  std::ofstream(dir / "quad.bin", std::ios::binary) << quadBuffer();
+  CHECK(loadMesh(writeFile("file_buffer.gltf", quadGltfJson("quad.bin"))).triangles.size() == 2);
+}
+
+TEST_CASE("GLB chunk lengths beyond the end of the file are refused before assimp allocates them",
+          "[mesh][bad_input]") {
+  // A JSON chunk claiming 0x7FFFFFF0 bytes made assimp allocate 2.2 GB (17 s) before it failed.
+  std::string glb = quadGlb();
+  const uint32_t lie = 0x7FFFFFF0;
+  glb.replace(12, 4, bytesOf(&lie, 4));
+  const auto json = writeFile("lying_json.glb", glb);
+  CHECK_THROWS_MATCHES(loadMesh(json), Error,
+                       Catch::Matchers::Message(fmt::format("{}: cannot load mesh (GLB chunk 'JSON' at byte 12 claims "
+                                                            "2147483632 bytes, the file has {} after its header)",
+                                                            json, glb.size() - 20)));
+  // The binary chunk, after the JSON.
+  glb = quadGlb();
+  uint32_t jsonLength;
+  std::memcpy(&jsonLength, glb.data() + 12, 4);
+  const size_t bin = 20 + jsonLength;
+  glb.replace(bin, 4, bytesOf(&lie, 4));
+  const auto body = writeFile("lying_bin.glb", glb);
+  CHECK_THROWS_WITH(loadMesh(body), Contains(fmt::format("{}: cannot load mesh (GLB chunk 'BIN?' at byte {} claims "
+                                                         "2147483632 bytes",
+                                                         body, bin)));
+  // The header's total length.
+  glb = quadGlb();
+  glb.replace(8, 4, bytesOf(&lie, 4));
+  const auto total = writeFile("lying_total.glb", glb);
+  CHECK_THROWS_WITH(loadMesh(total), Contains(total + ": cannot load mesh (GLB header claims 2147483632 bytes"));
 }
