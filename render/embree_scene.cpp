@@ -471,6 +471,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
   }
   rtcCommitScene(scene_);
   if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) throw Error("embree: scene build failed");
+  reach_ = sceneReach(scene);
   buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -495,17 +496,20 @@ EmbreeScene::UpdateTimes EmbreeScene::update(int mesh, const SampleRange& change
 
 EmbreeScene::~EmbreeScene() { release(); }
 
-Hit EmbreeScene::intersect(const Ray& r, RayCounters* counters) const {
+Hit EmbreeScene::intersect(const Ray& world, RayCounters* counters) const {
+  const NearRay near = nearScene(world, reach_);
+  Hit h;
+  if (near.misses) return h;
+  const Ray& r = near.ray;
   Context ctx;
   rtcInitIntersectContext(&ctx.ctx);
   ctx.counters = counters;
   ctx.lod = r.lod;
   RTCRayHit rh = toRayHit(r);
   rtcIntersect1(scene_, &ctx.ctx, &rh);
-  Hit h;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
   const Geometry& g = *geoms_[rh.hit.geomID];
-  h.t = rh.ray.tfar;
+  h.t = unshift(rh.ray.tfar, near.shift);
   h.mesh = g.mesh;
   h.prim = g.basePrim.empty() ? int(rh.hit.primID) : int(g.basePrim[rh.hit.primID]);
   if (g.intersector) {
@@ -521,7 +525,10 @@ Hit EmbreeScene::intersect(const Ray& r, RayCounters* counters) const {
   return h;
 }
 
-bool EmbreeScene::occluded(const Ray& r, RayCounters* counters) const {
+bool EmbreeScene::occluded(const Ray& world, RayCounters* counters) const {
+  const NearRay near = nearScene(world, reach_);
+  if (near.misses) return false;
+  const Ray& r = near.ray;
   Context ctx;
   rtcInitIntersectContext(&ctx.ctx);
   ctx.counters = counters;

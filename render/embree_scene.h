@@ -9,6 +9,7 @@
 #include "core/memory.h"
 #include "core/scene.h"
 #include "render/cone_lod.h"
+#include "render/far_rays.h"
 #include "render/intersector.h"
 
 #include <embree3/rtcore.h>
@@ -130,6 +131,7 @@ class EmbreeScene {
   std::shared_ptr<std::atomic<int64_t>> embreeBytes_;
   size_t microTriangles_ = 0, baseTriangles_ = 0;
   bool tessellate_ = false;
+  SceneReach reach_;  // rays starting far outside it are moved to it (render/far_rays.h)
   std::string traversalName_;
   double buildSeconds_ = 0;
 };

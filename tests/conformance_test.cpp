@@ -196,6 +196,21 @@ Scene torusScene() {
   return s;
 }
 
+// The plane of size 2 under a map of one row, one column or a few rows: cells 16384:1
+// and longer, micro-triangles far thinner than anything else here. `flat`: all zeros,
+// the surface is the plane itself.
+Scene elongatedScene(int w, int h, bool flat) {
+  Scene s;
+  s.path = fmt::format("<plane, {}{}x{} map>", flat ? "flat " : "", w, h);
+  SceneMesh q;
+  q.mesh = quadMesh(1.0f, 0.0f, 1);
+  auto map = std::make_shared<const HeightMap>(flat ? HeightMap(w, h, std::vector<float>(size_t(w) * h, 0.0f))
+                                                    : proceduralHeightMap(w, h, 9));
+  q.displacement = Displacement{map, 0.3f, 0.0f, vec2(1.0f)};
+  s.meshes.push_back(std::move(q));
+  return s;
+}
+
 std::string label(const TraversalConfig& c) {
   return fmt::format("{}+{}+{} ms={} inv={}{}", c.range, c.inverter, c.splitter, c.marchingScale,
                      c.inversionInTraversal, c.baseline.empty() ? "" : " baseline=" + c.baseline);
@@ -323,6 +338,39 @@ TEST_CASE("conformance: every combination agrees with the oracles on the asteroi
 
 TEST_CASE("conformance: every combination agrees with the oracles on a displaced sphere", "[conformance]") {
   runConformance(loadScene(kSphere), 150);
+}
+
+TEST_CASE("conformance: every combination agrees with the oracles on elongated and one-row maps", "[conformance][elongated]") {
+  // Few rays: the brute force tests every micro-triangle of a 2-triangle plane (~30 000).
+  const Scene flat = elongatedScene(16384, 1, true);
+  runConformance(flat, 12);
+  {  // The flat map is the plane y = 0: every oracle's t is the plane's, to float rounding.
+    AccelOptions bf;
+    bf.traversal.baseline = "bruteforce";
+    const EmbreeScene brute(flat, bf), tess(flat, AccelOptions{.tessellate = true, .traversal = {}}),
+        canonical(flat, AccelOptions{});
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+    size_t off[3] = {0, 0, 0};
+    std::string first;
+    for (int i = 0; i < 100; ++i) {
+      const vec3 o(2.0f * U(rng), 1.25f + 0.75f * U(rng), 2.0f * U(rng)), target(U(rng), 0.0f, U(rng));
+      const Ray r{o, target - o, 0.0f, kInfinity};
+      const double exact = -double(r.o.y) / double(r.d.y);
+      const EmbreeScene* scenes[3] = {&brute, &tess, &canonical};
+      for (int k = 0; k < 3; ++k) {
+        const Hit h = scenes[k]->intersect(r);
+        if (h.valid() && std::abs(h.t - exact) <= 0x1p-22 * exact) continue;
+        if (off[k]++ == 0 && first.empty()) first = fmt::format("ray {} scene {}: t={} exact {}", i, k, h.t, exact);
+      }
+    }
+    INFO("t off the plane (bruteforce, tessellated, canonical): " << off[0] << ", " << off[1] << ", " << off[2]
+                                                                   << " of 100; " << first);
+    CHECK(off[0] + off[1] + off[2] == 0);
+  }
+  runConformance(elongatedScene(4096, 1, false), 12);
+  runConformance(elongatedScene(1, 4096, false), 12);
+  runConformance(elongatedScene(4096, 3, false), 8);
 }
 
 namespace {

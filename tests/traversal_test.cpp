@@ -414,3 +414,53 @@ TEST_CASE("curve points between known ones are claimed: the inverter is the fall
     CHECK(perPrism < 0.15);
   }
 }
+
+TEST_CASE("rays from 1e6 and 1e7 away hit as rays from nearby", "[traversal][far]") {
+  // The plane of size 2 under a 32x32 map (heights 0..0.3); rays from far away, steep
+  // enough to cross the shell inside the plane, each also started near the plane on
+  // the same float line: same hit (t within float rounding of the near ray's).
+  Scene s;
+  s.path = "<far rays>";
+  SceneMesh q;
+  q.mesh = quadMesh(1.0f, 0.0f, 1);
+  q.displacement = Displacement{std::make_shared<const HeightMap>(proceduralHeightMap(32, 32, 4)), 0.3f, 0.0f, vec2(1.0f)};
+  s.meshes.push_back(std::move(q));
+  AccelOptions bf, tess;
+  bf.traversal.baseline = "bruteforce";
+  tess.tessellate = true;
+  const EmbreeScene canonical(s, AccelOptions{}), brute(s, bf), tessellated(s, tess);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> U(-0.1f, 0.1f);
+  for (const double far : {1e6, 1e7}) {
+    size_t missed[3] = {0, 0, 0}, off[3] = {0, 0, 0};
+    std::string first;
+    for (int i = 0; i < 300; ++i) {
+      vec3 w;
+      do w = randomDir(rng);
+      while (w.y < 0.5f);
+      const dvec3 target(U(rng), 0.15, U(rng));
+      const Ray r{vec3(target + far * dvec3(w)), vec3(target - dvec3(vec3(target + far * dvec3(w)))), 0.0f, kInfinity};
+      // The same float line started at t = 1 - 2/far (about 2 units before the target).
+      const double s0 = 1.0 - 2.0 / far;
+      const Ray nearRay{vec3(dvec3(r.o) + s0 * dvec3(r.d)), r.d, 0.0f, kInfinity};
+      const Hit ref = brute.intersect(nearRay);
+      REQUIRE(ref.valid());
+      const EmbreeScene* scenes[3] = {&canonical, &brute, &tessellated};
+      for (int k = 0; k < 3; ++k) {
+        const Hit h = scenes[k]->intersect(r);
+        // The near ray's line differs from the far one by the rounding of its origin
+        // (ulp 2^-22 at 2 units): t agrees to that over |d| = far, and to float t.
+        const double expect = s0 + double(ref.t);
+        if (!h.valid()) ++missed[k];
+        else if (std::abs(double(h.t) - expect) > 1e-6 * expect) ++off[k];
+        else continue;
+        if (first.empty())
+          first = fmt::format("ray {} ({}): {} t={}, expected {}", i, k, h.valid() ? "hit" : "miss", h.t, expect);
+      }
+    }
+    INFO("from " << far << ": missed (canonical, bruteforce, tessellated) " << missed[0] << ", " << missed[1] << ", "
+                 << missed[2] << "; t off " << off[0] << ", " << off[1] << ", " << off[2] << " of 300; " << first);
+    CHECK(missed[0] + missed[1] + missed[2] == 0);
+    CHECK(off[0] + off[1] + off[2] == 0);
+  }
+}

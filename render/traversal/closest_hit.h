@@ -31,9 +31,9 @@ struct ClosestHit {
     const ShearedVertex s00 = shear(R, q[0]->p), s10 = shear(R, q[1]->p), s11 = shear(R, q[2]->p),
                         s01 = shear(R, q[3]->p);
     MicroHit mh;
-    if (intersectSheared(R, s00, s10, s11, tmin, std::min(tmax, t), mh) && (!found || mh.t < t))
+    if (intersectSheared(R, s00, s10, s11, q[0]->p, q[1]->p, q[2]->p, tmin, std::min(tmax, t), mh) && (!found || mh.t < t))
       t = mh.t, found = true, tri = MicroTriangle{{*q[0], *q[1], *q[2]}}, h = mh;
-    if (intersectSheared(R, s00, s11, s01, tmin, std::min(tmax, t), mh) && (!found || mh.t < t))
+    if (intersectSheared(R, s00, s11, s01, q[0]->p, q[2]->p, q[3]->p, tmin, std::min(tmax, t), mh) && (!found || mh.t < t))
       t = mh.t, found = true, tri = MicroTriangle{{*q[0], *q[2], *q[3]}}, h = mh;
   }
   void fill(TriangleHit& hit) const {

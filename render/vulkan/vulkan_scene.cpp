@@ -13,6 +13,7 @@ using namespace vkgpu;
 VulkanScene::VulkanScene(const Scene& scene, const AccelOptions& opts) {
   const auto start = std::chrono::steady_clock::now();
   GpuRecords records = buildRecords(scene, opts);
+  reach_ = sceneReach(scene);
   geometryName_ = records.geometryName;
   baseTriangles_ = size_t(records.baseTriangles);
   run_ = std::make_unique<Runner>(std::move(records));
@@ -35,13 +36,20 @@ std::vector<Hit> VulkanScene::trace(const std::vector<Ray>& rays, std::vector<Ra
   std::vector<HitGpu> hg(n);
   std::vector<CountersGpu> cg(counters ? n : 0);
   std::vector<RayGpu> gpu(n);
-  for (size_t i = 0; i < n; ++i) gpu[i] = RayGpu{rays[i].o, rays[i].d, rays[i].tmin, rays[i].tmax, rays[i].lod, 0.0f};
+  // Far origins moved to the scene as EmbreeScene moves them (render/far_rays.h); a ray
+  // that cannot reach the scene is traced empty (tmin = tmax = 0, far from every surface).
+  std::vector<NearRay> near(n);
+  for (size_t i = 0; i < n; ++i) {
+    near[i] = nearScene(rays[i], reach_);
+    const Ray& r = near[i].ray;
+    gpu[i] = near[i].misses ? RayGpu{r.o, r.d, 0.0f, 0.0f, r.lod, 0.0f} : RayGpu{r.o, r.d, r.tmin, r.tmax, r.lod, 0.0f};
+  }
   run_->trace(gpu.data(), n, hg.data(), counters ? cg.data() : nullptr, anyHit, seconds);
   std::vector<Hit> out(n);
   if (counters) counters->assign(n, RayCounters{});
   for (size_t i = 0; i < n; ++i) {
     if (hg[i].mesh >= 0) {
-      out[i].t = hg[i].t;
+      out[i].t = unshift(hg[i].t, near[i].shift);
       out[i].mesh = hg[i].mesh;
       out[i].prim = hg[i].prim;
       out[i].uv = vec2(hg[i].u, hg[i].v);

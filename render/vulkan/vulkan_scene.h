@@ -50,6 +50,7 @@ class VulkanScene {
 
  private:
   std::unique_ptr<Runner> run_;
+  SceneReach reach_;  // render/far_rays.h
   std::string geometryName_;
   double buildSeconds_ = 0;
   size_t baseTriangles_ = 0;

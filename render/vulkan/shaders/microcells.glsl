@@ -357,12 +357,13 @@ int microCell(int i, int j) {
 }
 
 // ---- watertight ray / micro-triangle test (render/traversal/microtri.h) -----------------------
-vec3 g_wrO;
+vec3 g_wrO, g_wrD;
 int g_wrKx, g_wrKy, g_wrKz;
-float g_wrSx, g_wrSy, g_wrSz;
+float g_wrSx, g_wrSy;
 
 void makeWatertightRay(vec3 o, vec3 d) {
   g_wrO = o;
+  g_wrD = d;
   vec3 ad = abs(d);
   g_wrKz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
   g_wrKx = (g_wrKz + 1) % 3;
@@ -372,10 +373,23 @@ void makeWatertightRay(vec3 o, vec3 d) {
     g_wrKx = g_wrKy;
     g_wrKy = s;
   }
-  precise float sx = -d[g_wrKx] / d[g_wrKz], sy = -d[g_wrKy] / d[g_wrKz], sz = 1.0 / d[g_wrKz];
+  precise float sx = -d[g_wrKx] / d[g_wrKz], sy = -d[g_wrKy] / d[g_wrKz];
   g_wrSx = sx;
   g_wrSy = sy;
-  g_wrSz = sz;
+}
+
+// planeT: the ray's t at the triangle's plane, in double (NaN when the ray lies in it).
+float planeT(vec3 p0, vec3 p1, vec3 p2) {
+  precise double ax = double(p1.x) - double(p0.x), ay = double(p1.y) - double(p0.y), az = double(p1.z) - double(p0.z);
+  precise double bx = double(p2.x) - double(p0.x), by = double(p2.y) - double(p0.y), bz = double(p2.z) - double(p0.z);
+  precise double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+  precise double qx = double(p0.x) - double(g_wrO.x), qy = double(p0.y) - double(g_wrO.y),
+                 qz = double(p0.z) - double(g_wrO.z);
+  precise double num = qx * nx + qy * ny + qz * nz;
+  precise double den = double(g_wrD.x) * nx + double(g_wrD.y) * ny + double(g_wrD.z) * nz;
+  if (den == 0.0) return uintBitsToFloat(0x7fc00000u);
+  precise double t = num / den;
+  return float(t);
 }
 
 // intersectMicro: hit with t in [tmin, tmax]? Writes t and the barycentrics.
@@ -400,10 +414,8 @@ bool intersectMicro(vec3 p0, vec3 p1, vec3 p2, float tmin, float tmax, out float
   if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return false;
   precise float det = U + V + W;
   if (det == 0.0) return false;
-  precise float Az = g_wrSz * A[g_wrKz], Bz = g_wrSz * B[g_wrKz], Cz = g_wrSz * C[g_wrKz];
-  precise float T = U * Az + V * Bz + W * Cz;
   precise float inv = 1.0 / det;
-  precise float t = T * inv;
+  float t = planeT(p0, p1, p2);
   if (!(t >= tmin && t <= tmax)) return false;
   ht = t;
   hb = vec3(U * inv, V * inv, W * inv);
