@@ -742,7 +742,7 @@ TEST_CASE("node hierarchies deeper than 1000 levels are refused before assimp re
                                                       "recursively)"));
 }
 
-TEST_CASE("every file a mesh pulls in must be a regular file; a FIFO is refused before it is opened", "[mesh][bad_input]") {
+TEST_CASE("every file a mesh pulls in must be a regular file: a FIFO is refused before it is opened", "[mesh][bad_input]") {
   const auto dir = test::scratchDir("mesh");
   const std::string fifo = (dir / "pulled.fifo").string();
   if (!std::filesystem::exists(fifo)) REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
