@@ -788,23 +788,11 @@ TEST_CASE("Ctrl-C during render writes what was rendered, marked partial, and ex
   // --progress always logs the phases to a file: the signal goes in once rendering runs.
   const std::string cmd = std::string(OBLONG_BINARY) + " render --size 640x480 --spp 256 --threads 1 --progress always -o " +
                           png + " --stats " + stats + " > /dev/null 2> " + err;
-  const pid_t pid = ::fork();
-  REQUIRE(pid >= 0);
-  if (pid == 0) {
-    ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), (char*)nullptr);
-    ::_exit(127);
-  }
-  bool rendering = false;
-  for (int i = 0; i < 600 && !rendering; ++i) {  // up to 60 s for loading and building
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    rendering = slurp(err).find("rendering 640x480") != std::string::npos;
-  }
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  ::kill(pid, SIGINT);
-  int raw = 0;
-  ::waitpid(pid, &raw, 0);
+  // Up to 60 s for loading and building.
+  const test::Interrupted run = test::interruptOnce(cmd, err, "rendering 640x480", 60);
+  const int raw = run.status;
   INFO(slurp(err));
-  REQUIRE(rendering);
+  REQUIRE(run.reached);
   CHECK(WIFEXITED(raw));
   CHECK(WEXITSTATUS(raw) == 130);
   CHECK(fs::exists(png));

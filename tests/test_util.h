@@ -4,8 +4,12 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <chrono>
+#include <thread>
 
 #include <cstdint>
 #include <cstdlib>
@@ -41,6 +45,33 @@ inline CliRun runOblongCli(const std::string& args) {
   const std::string cmd = std::string(OBLONG_BINARY) + " " + args + " >" + o.string() + " 2>" + e.string();
   const int raw = std::system(cmd.c_str());
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(o), slurp(e)};
+}
+
+// Ctrl-C once a command runs: starts `cmd` under /bin/sh, waits up to `seconds` until
+// the file `log` (the command's stderr) contains `marker`, sends SIGINT 300 ms later and
+// waits for the command. `reached`: the marker appeared; `status`: waitpid's status.
+struct Interrupted {
+  bool reached;
+  int status;
+};
+inline Interrupted interruptOnce(const std::string& cmd, const std::filesystem::path& log, const std::string& marker,
+                                 int seconds) {
+  const pid_t pid = ::fork();
+  if (pid < 0) return {false, -1};
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), (char*)nullptr);
+    ::_exit(127);
+  }
+  bool reached = false;
+  for (int i = 0; i < 10 * seconds && !reached; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    reached = slurp(log).find(marker) != std::string::npos;
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ::kill(pid, SIGINT);
+  int raw = 0;
+  ::waitpid(pid, &raw, 0);
+  return {reached, raw};
 }
 
 // Writes a single-channel image from float values in [0,1] (or any, for float files).

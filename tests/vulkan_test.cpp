@@ -18,6 +18,7 @@
 #include "render/vulkan/vulkan_render.h"
 #include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"
+#include "tests/test_util.h"
 #include "tests/traversal_cases.h"
 
 #include <catch2/catch.hpp>
@@ -695,23 +696,11 @@ TEST_CASE("vulkan: Ctrl-C keeps what was rendered, a render beyond memory is ref
     const std::string png = D + "partial.png", stats = D + "partial.json", err = D + "err.txt";
     const std::string cmd = ob + " render --device vulkan --size 320x240 --spp 64 --progress always -o " + png +
                             " --stats " + stats + " > /dev/null 2> " + err;
-    const pid_t pid = ::fork();
-    REQUIRE(pid >= 0);
-    if (pid == 0) {
-      ::execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), (char*)nullptr);
-      ::_exit(127);
-    }
-    bool rendering = false;
-    for (int i = 0; i < 1200 && !rendering; ++i) {  // up to 120 s for lavapipe's shader compile
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      rendering = slurp(err).find("on Vulkan") != std::string::npos && slurp(err).find("rendering") != std::string::npos;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));
-    ::kill(pid, SIGINT);
-    int raw = 0;
-    ::waitpid(pid, &raw, 0);
+    // Up to 120 s for lavapipe's shader compile; the phase line comes once the scene is built.
+    const test::Interrupted run = test::interruptOnce(cmd, err, "spp on Vulkan", 120);
+    const int raw = run.status;
     INFO(slurp(err));
-    REQUIRE(rendering);
+    REQUIRE(run.reached);
     CHECK(WIFEXITED(raw));
     CHECK(WEXITSTATUS(raw) == 130);
     CHECK(fs::exists(png));
