@@ -25,7 +25,6 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
-#include <signal.h>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -39,7 +38,6 @@
 #include <map>
 #include <random>
 #include <string>
-#include <thread>
 
 using namespace oblong;
 
