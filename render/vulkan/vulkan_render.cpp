@@ -14,8 +14,8 @@ namespace oblong::vk {
 namespace {
 
 // Host memory of one sample in flight (its path, camera ray, hit, counters, value, and
-// its share of the shadow and bounce queues: measured about 590 bytes with one light,
-// rounded up) and of one pixel (the samples' sum and the camera rays' counters).
+// its share of the shadow and bounce queues: a few hundred bytes with one light, not
+// measured here; 1 KiB leaves room for more lights) and of one pixel (the samples' sum and the camera rays' counters).
 constexpr size_t kBytesPerSample = 1024;
 constexpr size_t kBytesPerPixel = sizeof(vec3) + sizeof(RayCounters);
 // Samples traced per band: large enough to fill a GPU, small enough to bound memory
