@@ -1,4 +1,4 @@
-// Displacement maps (DESIGN §1). A HeightMap holds the first channel of an image as
+// Displacement maps (docs/design.md §1). A HeightMap holds the first channel of an image as
 // float texels; a Displacement adds scale, bias and tiling and evaluates heights:
 //   h(uv) = scale · (H(tiling ⊙ uv) + bias),
 // H bilinear with texel centres at ((i+½)/W, (j+½)/H) and wrap addressing.
@@ -60,7 +60,7 @@ class HeightMap {
   std::string name_;
 };
 
-// A map applied to a mesh: scale, bias and tiling (DESIGN §1).
+// A map applied to a mesh: scale, bias and tiling (docs/design.md §1).
 struct Displacement {
   std::shared_ptr<const HeightMap> map;
   float scale = 1.0f;

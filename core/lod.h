@@ -7,7 +7,7 @@
 // Level k exists while 2^k divides both sizes (the wrapped grid must stay periodic)
 // and leaves at least 2 samples per axis.
 //
-// The surface at a fractional λ = k + f is DESIGN §1's micro-geometry on level k's grid
+// The surface at a fractional λ = k + f is docs/design.md §1's micro-geometry on level k's grid
 // with heights (1 − f)·H_k + f·L_{k+1}, where L_{k+1} is level k+1's micro-geometry
 // (piecewise linear on its cells) read at level k's points. At f = 1 that is level k+1's
 // height field itself, so the heights are continuous in λ, and every λ is a height map

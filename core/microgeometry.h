@@ -1,4 +1,4 @@
-// The intersectable micro-geometry (DESIGN §1): the texel-centre grid, each cell split
+// The intersectable micro-geometry (docs/design.md §1): the texel-centre grid, each cell split
 // by the diagonal (i,j)-(i+1,j+1), each cell triangle clipped in uv against the base
 // triangle T, every vertex mapped by Eq. 1 with T's own P and N, polygons fanned.
 //
@@ -8,7 +8,7 @@
 // sharing an edge produce bit-identical points along it.
 //
 // MicroCells is the one implementation: forEachMicroTriangle loops over cells with it,
-// and the traversal (render/traversal/traversal.h) calls it cell by cell. It allocates nothing,
+// and the traversal (traversal/traversal.h) calls it cell by cell. It allocates nothing,
 // so it can run in a per-ray hot loop, and both paths get bit-identical triangles.
 #pragma once
 

@@ -340,7 +340,7 @@ Mesh parseShape(const Reader& r) {
 }
 
 // Limits that keep a displaced mesh within what floats and the integer sample grid can
-// represent (DESIGN §3 invariant 6): finite heights, sample coordinates within ±2^30.
+// represent (docs/design.md §3 invariant 6): finite heights, sample coordinates within ±2^30.
 void checkDisplacement(const Reader& r, const Mesh& mesh, const Displacement& d) {
   const Interval raw = d.map->range();
   const double lo = double(d.scale) * (double(raw.lo) + d.bias), hi = double(d.scale) * (double(raw.hi) + d.bias);

@@ -1,4 +1,4 @@
-// The displaced triangle (DESIGN §1): base positions, unit vertex normals, uvs and
+// The displaced triangle (docs/design.md §1): base positions, unit vertex normals, uvs and
 // the derived constants the traversal needs.
 #pragma once
 

@@ -20,7 +20,7 @@
 // (1e-10), multi_start (true).
 //
 // This header does not include Ceres; the solver lives in ceres.cpp, compiled into the
-// library oblong_ceres, the only target that links Ceres (DESIGN invariant 4). A program
+// library oblong_ceres, the only target that links Ceres (docs/design.md invariant 4). A program
 // linking oblong_ceres knows "ceres" (it registers itself); others say it is not linked.
 //
 // Statistics: ceres/Inversions, ceres/Iterations, ceres/NotConverged.

@@ -1,4 +1,4 @@
-// Inverter (DESIGN §2, invariant 3): point-wise inversion of the displaced-surface map
+// Inverter (docs/design.md §2, invariant 3): point-wise inversion of the displaced-surface map
 // of one base triangle (RMIP paper §4.1, Eq. 2). Given a 3D point X, find (u, v, h) with
 //
 //     X = P(u,v) + h · N(u,v) / |N(u,v)|        b = (1-u-v, u, v)
@@ -8,7 +8,7 @@
 //     F(u,v,s) = P(u,v) + s · N(u,v) − X = 0,   h = s · |N(u,v)|,
 //
 // whose solutions are exactly the points of the offset triangles p_i + s·n_i (the
-// bounding prism of T for heights [hmin,hmax] is the image of T × [a,b], DESIGN
+// bounding prism of T for heights [hmin,hmax] is the image of T × [a,b], docs/design.md
 // invariant 2). The result is the barycentric pair (u,v), the texture coordinates
 // T.UV(u,v), the height h, whether the solver converged and how many iterations it took.
 //

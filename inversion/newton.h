@@ -40,7 +40,7 @@
 #include "core/stats.h"
 #include "inversion/cubic.h"
 #include "inversion/inverter.h"
-#include "render/traversal/constants.h"  // the values the Vulkan shader mirrors
+#include "core/kernels/constants.h"  // the values the Vulkan shader mirrors
 
 namespace oblong {
 

@@ -3,8 +3,8 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/microgeometry.h"
-#include "render/traversal/prism.h"
-#include "render/traversal/traversal.h"
+#include "traversal/prism.h"
+#include "traversal/traversal.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>

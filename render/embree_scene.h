@@ -1,4 +1,4 @@
-// The scene handed to Embree (DESIGN §2). Undisplaced meshes are native Embree
+// The scene handed to Embree (docs/design.md §2). Undisplaced meshes are native Embree
 // triangles. Displaced meshes are either
 //   - user geometry over their bounding prisms, intersected by an Intersector (the
 //     traversal chosen by name, or the brute-force / fixed-step baselines), or
@@ -10,7 +10,7 @@
 #include "core/scene.h"
 #include "render/cone_lod.h"
 #include "render/far_rays.h"
-#include "render/intersector.h"
+#include "traversal/intersector.h"
 
 #include <embree3/rtcore.h>
 

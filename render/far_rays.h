@@ -1,4 +1,4 @@
-// Rays that start far outside the scene (DESIGN invariant 7: the hit must not depend on
+// Rays that start far outside the scene (docs/design.md invariant 7: the hit must not depend on
 // how far along its line a ray starts). A float origin 1e7 away is exact, but every test
 // that subtracts it in float (Embree's box test over the BVH, Embree's triangle test, the
 // micro-triangles' edge functions) then works at ulp(1e7) = 1: coarser than the scene.

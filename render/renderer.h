@@ -8,10 +8,10 @@
 //            point and directional lights, a constant sky, Russian roulette after depth 3
 //
 // Shading normals (--normals): `micro`, the geometric normal of the hit micro-triangle
-// (the micro-geometry is flat, DESIGN §1; shows every texel cell and base edge), or
+// (the micro-geometry is flat, docs/design.md §1; shows every texel cell and base edge), or
 // `smooth`, the smoothed displaced normal of the PDM paper §5.1 (smoothDisplacedNormal).
 // Secondary rays start at p + ε·n_g on the side of the geometric normal n_g they leave
-// by, ε = 1e-4·max(1, |p|) (DESIGN invariant 5); with smooth normals, light and bounce
+// by, ε = 1e-4·max(1, |p|) (docs/design.md invariant 5); with smooth normals, light and bounce
 // directions below the geometric surface are dropped (no light through the surface).
 #pragma once
 
@@ -49,7 +49,7 @@ vec3 smoothDisplacedNormal(const DisplacedTriangle& T, const Displacement* d, fl
 // for smooth normals only. Shared by the CPU and Vulkan renderers.
 void shadingNormals(const Scene& scene, const std::vector<std::vector<DisplacedTriangle>>& triangles,
                     ShadingNormals kind, const Ray& r, const Hit& h, vec3& ngf, vec3& ns);
-// ∇_uv h of the bilinear height h(uv) (DESIGN §1), inside the cell that holds uv.
+// ∇_uv h of the bilinear height h(uv) (docs/design.md §1), inside the cell that holds uv.
 vec2 bilinearHeightGradient(const Displacement& d, const vec2& uv);
 
 struct RenderOptions {

@@ -9,9 +9,10 @@ purpose="${1:?usage: scripts/configure.sh demo|release|asan BUILD_DIR}"
 dir="${2:?usage: scripts/configure.sh demo|release|asan BUILD_DIR}"
 case "$purpose" in
   demo)    opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=OFF -DOBLONG_BUILD_BENCHMARKS=OFF) ;;
-  release) opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=ON) ;;
-  # Sanitizer build: unit tests only (benchmarks off), statistics on.
-  asan)    opts=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DOBLONG_SANITIZE=ON -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=OFF) ;;
+  release) opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=ON -DOBLONG_REQUIRE_VULKAN=ON) ;;
+  # Sanitizer build: unit tests only (benchmarks off), statistics on. The tests' builds
+  # require the Vulkan path (OBLONG_REQUIRE_VULKAN): without it the GPU tests would vanish.
+  asan)    opts=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DOBLONG_SANITIZE=ON -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=OFF -DOBLONG_REQUIRE_VULKAN=ON) ;;
   *) echo "scripts/configure.sh: unknown purpose '$purpose' (demo | release | asan)" >&2; exit 1 ;;
 esac
 cmake -S . -B "$dir" -G Ninja -DOBLONG_STATS=ON "${opts[@]}"

@@ -9,7 +9,7 @@
 // (strategies/quantize.h) or float pairs. Level 0 is the map's own floats either way.
 //
 // Levels are built only up to the one where two nodes cover QueryNeeds' largest extent
-// (DESIGN invariant 4); larger ranges use all the top built level's nodes they touch.
+// (docs/design.md invariant 4); larger ranges use all the top built level's nodes they touch.
 // Level 0 is read from the map itself (no copy). node()/levels() are the interface of
 // the mipmap-aligned quad-tree splitter (the RMIP driver with TFDM's nodes; TFDM itself is
 // the `tfdm` baseline).

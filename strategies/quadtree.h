@@ -5,7 +5,7 @@
 // index) lies strictly inside the rectangle's longer side; the curve's crossing with
 // that line comes from ψ in closed form — no inversion. With minmax_mipmap, inversion
 // during traversal off, and marching scale 1 this is the RMIP driver with TFDM's nodes: an
-// ablation, not TFDM (which is the `tfdm` baseline, render/traversal/tfdm.cpp).
+// ablation, not TFDM (which is the `tfdm` baseline, traversal/tfdm.cpp).
 //
 // Node alignment is in absolute sample indices; for map sizes that are not powers of two
 // the wrapped nodes of minmax_mipmap start again at every period, so the alignment is

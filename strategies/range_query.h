@@ -1,8 +1,8 @@
-// RangeQuery (DESIGN §2): bounds of the displaced micro-geometry's heights over a uv
+// RangeQuery (docs/design.md §2): bounds of the displaced micro-geometry's heights over a uv
 // rectangle. The contract: query(rect) contains every height the micro-geometry can
 // take over the rectangle. The micro-geometry over a rectangle is made of the grid
 // cells it touches, whose corners are texel-centre samples up to one texel outside it
-// (DESIGN invariant 2), so the base class snaps the rectangle outward to that sample
+// (docs/design.md invariant 2), so the base class snaps the rectangle outward to that sample
 // range and each strategy bounds the raw texels over an integer, possibly wrapping,
 // sample range.
 //
@@ -11,7 +11,7 @@
 // three interfaces: query / rawRange (here), invert (Inverter) and split (Splitter) are
 // the virtual entry points every caller uses; the ...Fast forms are the strategies'
 // inline, non-virtual implementations, which a static traversal instantiation calls
-// directly (render/traversal/README.md: opt-in, kept only where a benchmark shows a gain).
+// directly (traversal/README.md: opt-in, kept only where a benchmark shows a gain).
 //
 // A strategy registers itself in its .cpp (core/registry.h):
 //     OBLONG_REGISTER_RANGE_QUERY("name", factory, StrategyTraits{...});
@@ -38,7 +38,7 @@ struct SampleRange {
   int extentY() const { return y1 - y0 + 1; }
 };
 
-// What the scene can ask of a map (DESIGN invariant 4: build nothing else).
+// What the scene can ask of a map (docs/design.md invariant 4: build nothing else).
 struct QueryNeeds {
   int maxExtentX = 1;  // largest sample extent of any query, per axis
   int maxExtentY = 1;

@@ -25,7 +25,7 @@
 //
 // Only layers up to the largest query extent in QueryNeeds are built; larger queries are
 // covered by several top-layer blocks. Entries whose blocks wrap round the border are
-// filled with the wrapped pixels only when QueryNeeds::wrap (DESIGN invariant 4);
+// filled with the wrapped pixels only when QueryNeeds::wrap (docs/design.md invariant 4);
 // otherwise crossing queries are split at the border.
 #pragma once
 

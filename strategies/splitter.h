@@ -1,11 +1,11 @@
-// Splitter (DESIGN §2; RMIP paper §4.3, Fig. 5): halves the bound of a piece of the
+// Splitter (docs/design.md §2; RMIP paper §4.3, Fig. 5): halves the bound of a piece of the
 // ray's curve in texture space into a front and a back piece which together still
 // contain the curve.
 //
 // A piece is a stretch of the ray's projection (along the displacement lines) that is
 // monotone in both texture axes, between two curve points a (front, smaller t) and b:
 // the rectangle spanned by a and b bounds it. Coordinates are the traversal's local
-// sample coordinates (render/traversal/psi.h): texel centres at integers, grid cells [i,i+1]².
+// sample coordinates (traversal/psi.h): texel centres at integers, grid cells [i,i+1]².
 // Each point knows its ray parameter t exactly and its uv up to `pad` (per axis): the
 // true projection of the ray point at t lies within uv ± pad.
 //

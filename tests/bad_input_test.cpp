@@ -1,4 +1,4 @@
-// DESIGN invariant 6: bad input gets one clear error line, never a crash. Every case
+// docs/design.md invariant 6: bad input gets one clear error line, never a crash. Every case
 // runs twice: through the loader (loadScene throws oblong::Error whose message starts
 // with the scene file, is one line and names the problem) and through the command line
 // (`oblong info FILE`: exit status 1, exactly one line on stderr, "oblong: FILE: ...").

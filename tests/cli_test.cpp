@@ -68,7 +68,7 @@ TEST_CASE("oblong info reports the range-query structures built for the scene", 
     REQUIRE(r.status == 0);
     CHECK(has(r.out, std::string("range query '") + name + "'"));
     CHECK(has(r.out, "plain (Embree triangles)"));
-    // What was built, with bytes (DESIGN invariant 4): the default torus is tiled (4, 2).
+    // What was built, with bytes (docs/design.md invariant 4): the default torus is tiled (4, 2).
     CHECK(has(r.out, "wrapping queries yes (the map is tiled)"));
     CHECK(has(r.out, "prisms   : 2304 built (2304 well-posed, 0 box-only), 0 skipped"));
     CHECK(has(r.out, "built    : no range query, no prisms"));

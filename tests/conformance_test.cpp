@@ -1,4 +1,4 @@
-// Scene-level conformance (DESIGN invariant 1): every registered strategy combination,
+// Scene-level conformance (docs/design.md invariant 1): every registered strategy combination,
 // run as Embree user geometry over the prisms, against the pre-tessellated Embree scene
 // (the micro-triangles built explicitly) and against the brute-force Intersector, on
 // every ray family: camera rays, grazing rays, rays along the displacement direction,
@@ -17,11 +17,11 @@
 #include "core/procedural.h"
 #include "core/scene.h"
 #include "render/embree_scene.h"
-#include "render/intersector.h"
+#include "traversal/intersector.h"
 #include "strategies/range_query.h"
 #include "inversion/inverter.h"
-#include "tests/traversal_cases.h"
-#include "experiments/traversal/grazing_rays.h"
+#include "tests/fixtures/traversal_cases.h"
+#include "tests/fixtures/grazing_rays.h"
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>

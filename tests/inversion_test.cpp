@@ -1,12 +1,12 @@
-// Inverters (issue 3, DESIGN invariant 3): newton and cubic against the ceres reference
+// Inverters (issue 3, docs/design.md invariant 3): newton and cubic against the ceres reference
 // on the asteroid and synthetic triangles, round trips, "inside the prism ⇒ inside T",
-// and the stiff-case catalogue (tests/stiff_cases.h) with the thresholds of
+// and the stiff-case catalogue (tests/fixtures/stiff_cases.h) with the thresholds of
 // docs/inversion.md.
 #include "inversion/ceres.h"
 #include "inversion/cubic.h"
 #include "inversion/newton.h"
 #include "core/stats.h"
-#include "tests/stiff_cases.h"
+#include "tests/fixtures/stiff_cases.h"
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>

@@ -5,8 +5,8 @@
 #include "core/procedural.h"
 #include "core/scene.h"
 #include "render/embree_scene.h"
-#include "render/strategy_catalog.h"
-#include "tests/traversal_cases.h"
+#include "traversal/strategy_catalog.h"
+#include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 

@@ -1,8 +1,8 @@
 #include "core/microgeometry.h"
 #include "core/procedural.h"
 #include "render/embree_scene.h"
-#include "render/strategy_catalog.h"
-#include "tests/traversal_cases.h"
+#include "traversal/strategy_catalog.h"
+#include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 

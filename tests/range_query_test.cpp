@@ -1,4 +1,4 @@
-// RangeQuery strategies against an independent brute force (DESIGN invariants 2, 4).
+// RangeQuery strategies against an independent brute force (docs/design.md invariants 2, 4).
 #include "core/lod.h"
 #include "strategies/minmax_mipmap.h"
 #include "strategies/range_query.h"

@@ -1,17 +1,17 @@
 // Extending oblong (docs/extending.md): a throwaway strategy of each interface,
 // registered here with one line each as a user would in their own .cpp, is picked up by
-// both conformance suites (tests/traversal_cases.h reads the registries), listed in the
+// both conformance suites (tests/fixtures/traversal_cases.h reads the registries), listed in the
 // CLI help and selectable by name, with no other edit. Also: the opt-in static
 // traversal instantiation answers exactly as the generic path.
 #include "inversion/newton.h"
-#include "render/strategy_catalog.h"
-#include "render/traversal/traversal.h"
+#include "traversal/strategy_catalog.h"
+#include "traversal/traversal.h"
 #include "strategies/midpoint2d.h"
 #include "strategies/range_query.h"
 #include "strategies/rmip.h"
 #include "strategies/splitter.h"
 #include "tests/test_util.h"
-#include "tests/traversal_cases.h"
+#include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 

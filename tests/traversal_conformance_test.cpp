@@ -1,6 +1,6 @@
-// Per-triangle conformance (DESIGN invariant 1): every configuration of
+// Per-triangle conformance (docs/design.md invariant 1): every configuration of
 // conformanceConfigs() (every registered strategy combination plus the shape variants,
-// tests/traversal_cases.h) against the brute-force Intersector, per base triangle, on
+// tests/fixtures/traversal_cases.h) against the brute-force Intersector, per base triangle, on
 // every ray family, on the regular and the stiff scenarios. Same hit/miss, t within 1e-5
 // relative (of max(|t|, 1e-3)); zero mismatches. The hidden tag [.large] runs many more
 // rays per family; OBLONG_VERBOSE=1 prints per-configuration timings.
@@ -10,15 +10,15 @@
 #include "inversion/ceres.h"
 #include "inversion/newton.h"
 #include "render/embree_scene.h"
-#include "render/intersector.h"
-#include "render/traversal/prism.h"
-#include "render/traversal/psi.h"
-#include "render/traversal/rect_bounds.h"
-#include "render/traversal/traversal.h"
+#include "traversal/intersector.h"
+#include "traversal/prism.h"
+#include "traversal/psi.h"
+#include "traversal/rect_bounds.h"
+#include "traversal/traversal.h"
 #include "strategies/quadtree.h"
 #include "strategies/splitter.h"
 
-#include "tests/traversal_cases.h"
+#include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>

@@ -1,4 +1,4 @@
-// The traversal's geometry (DESIGN invariants 2, 5): the allocation-free MicroCells
+// The traversal's geometry (docs/design.md invariants 2, 5): the allocation-free MicroCells
 // against forEachMicroTriangle, the prism and the shell analysis against the
 // micro-geometry, ψ's monotone split, and the box over a snapped rectangle.
 #include "core/microgeometry.h"
@@ -7,15 +7,15 @@
 #include "inversion/ceres.h"
 #include "inversion/newton.h"
 #include "render/embree_scene.h"
-#include "render/intersector.h"
-#include "render/traversal/prism.h"
-#include "render/traversal/psi.h"
-#include "render/traversal/rect_bounds.h"
-#include "render/traversal/traversal.h"
+#include "traversal/intersector.h"
+#include "traversal/prism.h"
+#include "traversal/psi.h"
+#include "traversal/rect_bounds.h"
+#include "traversal/traversal.h"
 #include "strategies/quadtree.h"
 #include "strategies/splitter.h"
 
-#include "tests/traversal_cases.h"
+#include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>

@@ -1,22 +1,22 @@
 // The traversal's interfaces and baselines: splitter names and parameters, quadtree's
 // aligned split, intersector names, bounds, memory and statistics, fixedstep's sanity, and
-// the float traversal against a double-precision run (DESIGN invariant 5).
+// the float traversal against a double-precision run (docs/design.md invariant 5).
 #include "core/microgeometry.h"
 #include "core/procedural.h"
 #include "core/stats.h"
 #include "inversion/ceres.h"
 #include "inversion/newton.h"
 #include "render/embree_scene.h"
-#include "render/intersector.h"
-#include "render/traversal/prism.h"
-#include "render/traversal/psi.h"
-#include "render/traversal/rect_bounds.h"
-#include "render/traversal/traversal.h"
+#include "traversal/intersector.h"
+#include "traversal/prism.h"
+#include "traversal/psi.h"
+#include "traversal/rect_bounds.h"
+#include "traversal/traversal.h"
 #include "strategies/quadtree.h"
 #include "strategies/splitter.h"
 
 #include "tests/test_util.h"
-#include "tests/traversal_cases.h"
+#include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
@@ -165,7 +165,7 @@ dvec3 microVertexDouble(const DisplacedTriangle& T, const Displacement& d, int i
 
 }  // namespace
 
-// DESIGN invariant 5: the float bounds (padded, see docs/traversal.md) are checked
+// docs/design.md invariant 5: the float bounds (padded, see docs/traversal.md) are checked
 // against a double-precision run. The micro-geometry of the cells wholly inside a
 // triangle is rebuilt in double and intersected in double; every hit found there with a
 // clear margin (not within float noise of a micro-edge) must be found by the float

@@ -19,7 +19,7 @@
 #include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"
 #include "tests/test_util.h"
-#include "tests/traversal_cases.h"
+#include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
 #include <fmt/core.h>
@@ -232,11 +232,11 @@ struct StepParity {
 // The contract of the mirror (docs/vulkan.md "The contract"). With one displaced triangle
 // per scene the order in which prisms are handed over cannot matter, so the GPU must run
 // the CPU's algorithm exactly: on every ray of every family of the traversal tests
-// (tests/traversal_cases.h: camera, grazing, along ±N, inside the shell, spawned, shadow;
+// (tests/fixtures/traversal_cases.h: camera, grazing, along ±N, inside the shell, spawned, shadow;
 // plus scaled, axis-aligned and far-away directions) over the conformance scenarios and
 // the stiff ones, the same hit or miss, the same t (bit for bit), and the same work
 // counters (prisms, boxes, range queries, inversions, marched cells, micro-triangles).
-// A constant changed on one side only (the shared ones are in render/traversal/constants.h)
+// A constant changed on one side only (the shared ones are in core/kernels/constants.h)
 // or a step of RayPatch changed without its GLSL copy fails here.
 TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step", "[vulkan]") {
   vulkanTestEnv();

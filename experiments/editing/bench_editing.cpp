@@ -17,7 +17,7 @@
 #include "render/camera.h"
 #include "render/embree_scene.h"
 #include "render/renderer.h"
-#include "experiments/range_query/relief_map.h"
+#include "tests/fixtures/relief_map.h"
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>

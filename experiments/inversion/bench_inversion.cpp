@@ -8,16 +8,16 @@
 //
 // Datasets: "asteroid" (every triangle of glmark2's asteroid-low.3ds, heights ±0.25 of
 // its longest edge, 8 interior points plus the boundary and extreme sets per triangle),
-// "stiff" (the cases of tests/stiff_cases.h except translated_*), "far_from_origin"
+// "stiff" (the cases of tests/fixtures/stiff_cases.h except translated_*), "far_from_origin"
 // (translated_1e4, translated_1e6) and "synthetic" (randomCases(150, 11): twisted
 // normals). Reference: ceres (invertD). Error:
-// max(|Δu|, |Δv|, |Δh| / max(L, |h|)) (tests/stiff_cases.h), over the samples where the
+// max(|Δu|, |Δv|, |Δh| / max(L, |h|)) (tests/fixtures/stiff_cases.h), over the samples where the
 // reference converged and the point has a single preimage. Build with -DOBLONG_STATS=OFF
 // for timings (run.sh does).
 #include "inversion/ceres.h"
 #include "inversion/cubic.h"
 #include "inversion/newton.h"
-#include "tests/stiff_cases.h"
+#include "tests/fixtures/stiff_cases.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>

@@ -9,7 +9,7 @@
 // every TBB thread. Counters: MB = the structure's bytes, GBps = (map bytes read +
 // structure bytes written) / time, texels_per_s. bandwidth/read and bandwidth/copy time a
 // plain sum and a memcpy over 1 GiB with the same threads: the ceiling such a pass meets.
-#include "experiments/range_query/relief_map.h"
+#include "tests/fixtures/relief_map.h"
 #include "strategies/range_query.h"
 
 #include <benchmark/benchmark.h>

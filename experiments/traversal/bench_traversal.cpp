@@ -23,7 +23,7 @@
 #include "core/error.h"
 #include "render/embree_scene.h"
 #include "render/sampling.h"
-#include "experiments/traversal/grazing_rays.h"
+#include "tests/fixtures/grazing_rays.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>

@@ -9,7 +9,7 @@
 // sections' bytes. Checksums are FNV-1a 64 over 8-byte words (checksum64). Section
 // "meta" is JSON (format, version, struct sizes, scene, camera, image, lights, ...); the
 // others are the arrays of GpuRecords as they lie in memory. The version changes with
-// any change of shared.h's structs: a file of another version is refused.
+// any change of device_records.h's structs: a file of another version is refused.
 #pragma once
 
 #include "core/scene.h"

@@ -1,4 +1,4 @@
-// `--device vulkan` for oblong trace and oblong render, and oblong bake (render/main.cpp calls these
+// `--device vulkan` for oblong trace and oblong render, and oblong bake (render/apps/oblong.cpp calls these
 // after it has read the scene, the strategy flags and the rays). Without the Vulkan
 // target (CMake option OBLONG_VULKAN off, or Vulkan / glslc not installed), the stubs
 // in commands_stub.cpp fail with one line saying so.

@@ -1,13 +1,13 @@
 // The Vulkan path's upload records from a Scene (records.h). The per-triangle constants
-// are taken from the CPU's own TraversalMesh (render/traversal/traversal_mesh.h), built
+// are taken from the CPU's own TraversalMesh (traversal/traversal_mesh.h), built
 // by the same createIntersector call that EmbreeScene makes, so both paths start from
 // identical numbers; the RMIP layers are the CPU traversal's own Rmip, copied as they are.
 #include "render/vulkan/records.h"
-#include "render/traversal/prism.h"
+#include "traversal/prism.h"
 
 #include "core/error.h"
-#include "render/traversal/lod_per_ray.h"
-#include "render/traversal/traversal.h"
+#include "traversal/lod_per_ray.h"
+#include "traversal/traversal.h"
 #include "render/vulkan/rmip_layout.h"
 #include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"

@@ -1,11 +1,11 @@
-// Everything the Vulkan path uploads, as plain arrays in the GPU layouts of shared.h:
+// Everything the Vulkan path uploads, as plain arrays in the GPU layouts of core/kernels/device_records.h:
 // built from a Scene by buildRecords (records.cpp, which needs the CPU libraries), read
 // and written as one baked file by bake_file.h, and consumed by the device runner
 // (runner.h), which needs nothing but the Vulkan loader. `oblong --device vulkan`,
 // `oblong bake` and `oblong_vkbench` share these records and the runner.
 #pragma once
 
-#include "render/vulkan/shared.h"
+#include "core/kernels/device_records.h"
 
 #include <cstddef>
 #include <cstdint>

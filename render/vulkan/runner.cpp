@@ -7,7 +7,7 @@
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 
 #include "core/error.h"
-#include "render/vulkan/shared.h"
+#include "core/kernels/device_records.h"
 
 #include <fmt/format.h>
 #include <vulkan/vulkan.h>

@@ -1,4 +1,4 @@
-// libFuzzer entry point for the scene loader (DESIGN invariant 6: bad input gets a
+// libFuzzer entry point for the scene loader (docs/design.md invariant 6: bad input gets a
 // clear error, never a crash). Built by scripts/fuzz.sh (clang, -fsanitize=fuzzer,
 // address,undefined; CMake option OBLONG_BUILD_FUZZERS).
 //

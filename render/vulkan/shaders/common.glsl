@@ -1,11 +1,11 @@
 // Declarations shared by the ray tracing stages: extensions, the shared layouts
-// (render/vulkan/shared.h) and the descriptor set.
+// (core/kernels/device_records.h) and the descriptor set.
 #extension GL_EXT_ray_tracing : require
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_nonuniform_qualifier : require
 
-#include "../shared.h"
+#include "core/kernels/device_records.h"
 
 layout(set = 0, binding = OBLONG_BIND_TLAS) uniform accelerationStructureEXT tlas;
 layout(set = 0, binding = OBLONG_BIND_RAYS, scalar) readonly buffer Rays { RayGpu rays[]; };

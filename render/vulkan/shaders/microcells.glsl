@@ -1,10 +1,10 @@
-// The micro-geometry cell by cell (DESIGN §1): a line-for-line GLSL port of
+// The micro-geometry cell by cell (docs/design.md §1): a line-for-line GLSL port of
 // core/microgeometry.cpp's MicroCells::cell (interior cells, Sutherland-Hodgman clipping
 // against T's edges with the line bookkeeping, canonical edge evaluation; the CPU skips
 // the clips against edges whose half-plane holds the whole cell and reuses cached grid
 // points, which yields the same triangles bit for bit — the parity tests compare them
 // with this port, which clips against all three) and of
-// render/traversal/microtri.h's watertight ray/micro-triangle test. Every float and double
+// traversal/microtri.h's watertight ray/micro-triangle test. Every float and double
 // operation is `precise` (SPIR-V NoContraction): no fused multiply-add, so the
 // micro-vertices, edge functions and t come out as the CPU computes them, which both
 // watertightness and CPU/GPU parity rely on. Needs the globals of traversal.glsl:
@@ -356,7 +356,7 @@ int microCell(int i, int j) {
   return count;
 }
 
-// ---- watertight ray / micro-triangle test (render/traversal/microtri.h) -----------------------
+// ---- watertight ray / micro-triangle test (traversal/microtri.h) -----------------------
 vec3 g_wrO, g_wrD;
 int g_wrKx, g_wrKy, g_wrKz;
 float g_wrSx, g_wrSy;

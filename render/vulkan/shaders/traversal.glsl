@@ -1,7 +1,7 @@
-// The per-ray, per-prism traversal (render/traversal/ray_patch.h's RayPatch) in GLSL, for
+// The per-ray, per-prism traversal (traversal/ray_patch.h's RayPatch) in GLSL, for
 // the intersection shader. Mirrors the CPU code function by function (same names, same
 // order of operations, double where the CPU uses double, float where it uses float), with
-// the CPU's constants (render/traversal/constants.h). tests/vulkan_test.cpp holds it to
+// the CPU's constants (core/kernels/constants.h). tests/vulkan_test.cpp holds it to
 // the CPU step for step: same hits and the same per-ray work on one-triangle scenes.
 //
 // What runs: TraversalMesh::missesPrism (the early reject), then RayPatch::run for
@@ -21,7 +21,7 @@
 // from one generator (nextCell: a box range or a marched piece), tested at one place in
 // runLoop.
 
-#include "../../traversal/constants.h"  // shared with the CPU traversal and inversion/newton.h
+#include "core/kernels/constants.h"  // shared with the CPU traversal and inversion/newton.h
 
 #define kInfF uintBitsToFloat(0x7f800000u)
 #define kInfD double(kInfF)
@@ -175,7 +175,7 @@ vec2 toHeight(vec2 raw) {
   return vec2(min(a, b), max(a, b));
 }
 
-// ---- boxOverRect (render/traversal/rect_bounds.h) -----------------------------------------------
+// ---- boxOverRect (traversal/rect_bounds.h) -----------------------------------------------
 void boxOverRect(double m, dvec2 lo, dvec2 hi, double hlo, double hhi, double pad, out dvec3 blo, out dvec3 bhi) {
   precise dvec3 Nlo, Nhi;
   for (int k = 0; k < 3; ++k) {
@@ -257,7 +257,7 @@ double copysignD(double m, double s) {  // std::copysign
   return neg ? -abs(m) : abs(m);
 }
 
-// LocalFrame (render/traversal/psi.h)
+// LocalFrame (traversal/psi.h)
 dvec2 frameBary(dvec2 p) {
   precise dvec2 r = TRI.bc + TRI.bX * p.x + TRI.bY * p.y;
   return r;
@@ -275,10 +275,10 @@ dvec3 frameN(dvec2 b) {
   return r;
 }
 
-// ---- quadraticRoots: the CPU's own code (render/traversal/patch_math.h) -------------------------
-#include "../../traversal/patch_math.h"
+// ---- quadraticRoots: the CPU's own code (core/kernels/patch_math.h) -------------------------
+#include "core/kernels/patch_math.h"
 
-// ---- ψ (render/traversal/psi.h Psi) --------------------------------------------------------------
+// ---- ψ (traversal/psi.h Psi) --------------------------------------------------------------
 double g_c0, g_cX, g_cY, g_cXX, g_cXY, g_cYY;
 
 void psiMake() {
@@ -367,7 +367,7 @@ int monotoneSplits(double tIn, double tOut, out double ts[4]) {
   return u;
 }
 
-// ---- the inflated prism and its crossings (render/traversal/prism.cpp Prism) -------------------
+// ---- the inflated prism and its crossings (traversal/prism.cpp Prism) -------------------
 dvec3 g_pq[3], g_pn[3];
 dvec2 g_pbv[3];
 double g_pa, g_pb;
@@ -1189,7 +1189,7 @@ bool runPatch() {
   return g_found;
 }
 
-// TraversalMesh::missesPrism (render/traversal/traversal_mesh.h), which Traversal::intersect runs before
+// TraversalMesh::missesPrism (traversal/traversal_mesh.h), which Traversal::intersect runs before
 // RayPatch: a cheap exact reject for origins within the budget, [tmin, tmax] with the
 // traversal's slack against the padded box of the inflated prism, then the oriented box
 // around it (PrismOBB::clip). The host's own boxes (TriGpu infPad*, obb*).

@@ -1,4 +1,4 @@
-#include "render/strategy_catalog.h"
+#include "traversal/strategy_catalog.h"
 
 #include "inversion/inverter.h"
 #include "strategies/range_query.h"

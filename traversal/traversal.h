@@ -1,20 +1,20 @@
-// The traversal driver (RMIP paper Alg. 1; DESIGN §2): Traversal<RQ, Inv, Split>, an
+// The traversal driver (RMIP paper Alg. 1; docs/design.md §2): Traversal<RQ, Inv, Split>, an
 // Intersector over any registered strategy combination. createIntersector
-// (render/intersector.h) builds Traversal<RangeQuery, Inverter, Splitter>, which calls
+// (traversal/intersector.h) builds Traversal<RangeQuery, Inverter, Splitter>, which calls
 // the strategies through their virtual interfaces (one indirect call per range query,
 // inversion and split); an opt-in static instantiation on concrete types is one line
 // (OBLONG_STATIC_TRAVERSAL below) and is kept only where a benchmark shows it faster.
-// Per ray and triangle the work is RayPatch's (render/traversal/ray_patch.h, where the
+// Per ray and triangle the work is RayPatch's (traversal/ray_patch.h, where the
 // algorithm is described); the per-triangle constants are TraversalMesh's
 // (traversal_mesh.h); createIntersector and describe() are in create.cpp; the
 // baselines (bruteforce, fixedstep in baselines.cpp, tfdm in tfdm.cpp) register
-// themselves in BaselineRegistry (render/intersector.h).
+// themselves in BaselineRegistry (traversal/intersector.h).
 #pragma once
 
 #include "core/registry.h"
-#include "render/intersector.h"
-#include "render/traversal/ray_patch.h"
-#include "render/traversal/traversal_mesh.h"
+#include "traversal/intersector.h"
+#include "traversal/ray_patch.h"
+#include "traversal/traversal_mesh.h"
 
 #include <memory>
 #include <string>

@@ -1,5 +1,5 @@
 // Bounding prisms and the shell analysis (see prism.h for the reasoning).
-#include "render/traversal/prism.h"
+#include "traversal/prism.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>

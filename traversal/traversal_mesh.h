@@ -1,17 +1,17 @@
 // Per-triangle constants of a displaced mesh's traversal, built once: the shell analysis
-// (render/traversal/prism.h), the local frame (psi.h), the inflated prism with its boxes
+// (traversal/prism.h), the local frame (psi.h), the inflated prism with its boxes
 // padded for the watertight micro-triangle test's rounding, and the cheap per-ray reject.
 #pragma once
 
 #include "core/microgeometry.h"
-#include "render/intersector.h"
-#include "render/traversal/constants.h"
-#include "render/traversal/microtri.h"
-#include "render/traversal/prism.h"
+#include "traversal/intersector.h"
+#include "core/kernels/constants.h"
+#include "traversal/microtri.h"
+#include "traversal/prism.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include "render/traversal/psi.h"
+#include "traversal/psi.h"
 
 #include <cstring>
 #include <limits>
@@ -85,7 +85,7 @@ struct RayMargins {
 // convex combination of them): along the face normal and, in T's plane, along edge 0 and
 // perpendicular to each of the three edges — a box with its corners cut to T's shape.
 // Most rays Embree hands over meet the world AABB of a tilted prism but miss the prism;
-// this test rejects them before the exact crossings (render/traversal/prism.cpp).
+// this test rejects them before the exact crossings (traversal/prism.cpp).
 // The slabs are tested in the order that rejects soonest (the loop stops at the first
 // miss): on the asteroid's primary rays the normal's slab alone rejects 59 % of the rays
 // the whole box rejects, each edge's perpendicular 17-20 %, the slab along edge 0 8 %.

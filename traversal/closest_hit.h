@@ -1,10 +1,10 @@
-// The closest hit over micro-triangles (watertight test, render/traversal/microtri.h),
+// The closest hit over micro-triangles (watertight test, traversal/microtri.h),
 // shared by the traversal and the baselines.
 #pragma once
 
 #include "core/microgeometry.h"
-#include "render/intersector.h"
-#include "render/traversal/microtri.h"
+#include "traversal/intersector.h"
+#include "traversal/microtri.h"
 
 #include <algorithm>
 

@@ -46,7 +46,7 @@ using uint = uint32_t;
 #define OBLONG_HITGROUP_TRIANGLES 1
 
 // The traversal's constants (stack size, slacks, Newton's tolerance, ...) are in
-// render/traversal/constants.h, shared with the CPU traversal and inversion/newton.h.
+// core/kernels/constants.h, shared with the CPU traversal and inversion/newton.h.
 
 // One ray: the CPU's Ray (lod < 0: none; read by a mesh with a λ per ray only).
 struct RayGpu {
@@ -75,7 +75,7 @@ struct CountersGpu {
 };
 
 // One displaced base triangle: DisplacedTriangle, its PrismParams, LocalFrame and the
-// MicroCells constants (render/traversal/traversal_mesh.h, psi.h, core/microgeometry.h),
+// MicroCells constants (traversal/traversal_mesh.h, psi.h, core/microgeometry.h),
 // precomputed on the host by the very code the CPU runs.
 struct TriGpu {
   // LocalFrame: P = Pc + PX X + PY Y, N = Nc + NX X + NY Y over local sample coordinates.

@@ -1,7 +1,7 @@
 // createIntersector: the traversal for any registered strategy combination (the generic
 // path, or an opt-in static instantiation), or a registered baseline (BaselineRegistry).
-// See render/traversal/traversal.h and docs/traversal.md.
-#include "render/traversal/traversal.h"
+// See traversal/traversal.h and docs/traversal.md.
+#include "traversal/traversal.h"
 
 #include <chrono>
 

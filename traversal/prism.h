@@ -1,4 +1,4 @@
-// Bounding prisms of displaced triangles (DESIGN §2, invariant 2; RMIP paper §4.1,
+// Bounding prisms of displaced triangles (docs/design.md §2, invariant 2; RMIP paper §4.1,
 // Fig. 2c) and the per-triangle constants the traversal needs to stay conservative.
 //
 // Prism coordinates. With G(b, s) = P(b) + s·N(b) (N interpolated, not normalised), the
@@ -33,7 +33,7 @@
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/triangle.h"
-#include "render/traversal/psi.h"
+#include "traversal/psi.h"
 
 namespace oblong {
 

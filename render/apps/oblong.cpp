@@ -25,8 +25,8 @@
 #include "render/progress.h"
 #include "render/rays_io.h"
 #include "render/renderer.h"
-#include "render/strategy_catalog.h"
-#include "render/traversal/traversal.h"
+#include "traversal/strategy_catalog.h"
+#include "traversal/traversal.h"
 #include "render/vulkan/commands.h"
 #include "strategies/range_query.h"
 
@@ -514,7 +514,7 @@ std::string infoValue(const std::string& key, const nlohmann::json& v) {
   return v.is_string() ? v.get<std::string>() : v.dump();
 }
 
-// What the traversal built for one displaced mesh (DESIGN invariant 4), from its
+// What the traversal built for one displaced mesh (docs/design.md invariant 4), from its
 // describe(): the range query's layout and bytes, the strategies' resolved parameters,
 // the code path.
 void printTraversal(const nlohmann::json& d) {

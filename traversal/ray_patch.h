@@ -1,5 +1,5 @@
 // RayPatch: one ray against one displaced triangle, the state of the RMIP traversal
-// (Thonat et al. 2023, Alg. 1; DESIGN §2) and the splitters' context.
+// (Thonat et al. 2023, Alg. 1; docs/design.md §2) and the splitters' context.
 //
 // Per ray and displaced triangle (docs/traversal.md has the reasoning):
 //   1. Clip the ray to the triangle's inflated prism (prism.h); its crossings give the
@@ -27,13 +27,13 @@
 #include "core/microgeometry.h"
 #include "core/stats.h"
 #include "inversion/inverter.h"
-#include "render/intersector.h"
-#include "render/traversal/closest_hit.h"
-#include "render/traversal/constants.h"
-#include "render/traversal/prism.h"
-#include "render/traversal/psi.h"
-#include "render/traversal/rect_bounds.h"
-#include "render/traversal/traversal_mesh.h"
+#include "traversal/intersector.h"
+#include "traversal/closest_hit.h"
+#include "core/kernels/constants.h"
+#include "traversal/prism.h"
+#include "traversal/psi.h"
+#include "traversal/rect_bounds.h"
+#include "traversal/traversal_mesh.h"
 #include "strategies/range_query.h"
 #include "strategies/splitter.h"
 

@@ -1,5 +1,5 @@
 // The traversal's and the inverter's numerical constants, defined once for the CPU
-// (render/traversal/ray_patch.h, render/traversal/traversal_mesh.h, inversion/newton.h)
+// (traversal/ray_patch.h, traversal/traversal_mesh.h, inversion/newton.h)
 // and the Vulkan shaders (render/vulkan/shaders/traversal.glsl, which mirrors
 // TraversalMesh::missesPrism, RayPatch and Newton::solve line by line). This header is
 // both C++ and GLSL: plain #defines with literal values, nothing else. Change a value
@@ -14,14 +14,14 @@
 // own double value (the SPIR-V holds the double 1e-05, not the float 1e-05f), so both
 // sides compute with the same values.
 //
-// Not here yet: the literals of render/traversal/psi.h (rayParamAt),
+// Not here yet: the literals of traversal/psi.h (rayParamAt),
 // prism.cpp (Prism::crossings), rect_bounds.h (boxOverRect) and inversion/cubic.h
 // (polyRoots, cubicSolve) are still written on both sides, held only by the parity test
 // (docs/vulkan.md, "The contract").
 #ifndef OBLONG_TRAVERSAL_CONSTANTS_H
 #define OBLONG_TRAVERSAL_CONSTANTS_H
 
-// ---- RayPatch and TraversalMesh (render/traversal/ray_patch.h, traversal_mesh.h) ----------
+// ---- RayPatch and TraversalMesh (traversal/ray_patch.h, traversal_mesh.h) ----------
 
 // Entries of the per-ray, per-prism stack of pieces / box ranges (RayPatch::kStack). A push
 // that would overflow marches (or tests the cells of) the current piece instead: correct,

@@ -12,7 +12,7 @@
 //   - prisms take those heights and the larger cell delta (TraversalMesh::build),
 //   - the oracle's heights likewise (baselines.cpp, exactHeights).
 // Embree gets one box per triangle, the union of its prisms over the levels.
-#include "render/traversal/lod_per_ray.h"
+#include "traversal/lod_per_ray.h"
 
 #include "core/error.h"
 #include "core/lod.h"

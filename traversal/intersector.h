@@ -1,5 +1,5 @@
 // Intersector: the per-mesh interface between Embree's user geometry and a traversal
-// (DESIGN §2). One Intersector serves one displaced mesh: it bounds every displaced
+// (docs/design.md §2). One Intersector serves one displaced mesh: it bounds every displaced
 // triangle (its prism) and finds the first hit of a ray with one triangle's
 // micro-geometry. The Embree callback is one indirect call per ray/prism pair.
 #pragma once

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "core/error.h"
-#include "render/traversal/traversal.h"
+#include "traversal/traversal.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // The "tfdm" baseline: Tessellation-Free Displacement Mapping (Thonat et al. 2021) as it
-// traverses, the RMIP paper's main competitor (RMIP paper §3, §6; DESIGN §2). Per ray and
+// traverses, the RMIP paper's main competitor (RMIP paper §3, §6; docs/design.md §2). Per ray and
 // displaced triangle:
 //   - a texture-space quad-tree over a min-max mipmap, descended from the coarsest nodes
 //     covering T's cells (at most 2×2 roots: the level at which T's cell range spans at
@@ -19,12 +19,12 @@
 // Steps as the RMIP paper's Fig. 9 counts them: every node whose box is tested
 // (`boxes`) plus every leaf cell tested (`cells_marched`). docs/tfdm.md gives the
 // sources of each choice.
-#include "render/traversal/traversal.h"
+#include "traversal/traversal.h"
 
 #include "core/error.h"
 #include "core/stats.h"
-#include "render/traversal/closest_hit.h"
-#include "render/traversal/rect_bounds.h"
+#include "traversal/closest_hit.h"
+#include "traversal/rect_bounds.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -52,7 +52,7 @@ int64_t wrap64(int64_t i, int64_t n) {
 
 // The min-max mipmap over the micro-geometry's cells. Level 0 holds, per cell (i, j),
 // the [min, max] of its four corner samples (i..i+1, j..j+1, wrapped): every
-// micro-vertex of the cell, clipped or not, lies between them (DESIGN invariant 2).
+// micro-vertex of the cell, clipped or not, lies between them (docs/design.md invariant 2).
 // Level L+1 is the union of 2×2 nodes of level L. Levels are periodic (the map wraps,
 // tiling is free) while 2^L divides both sides; a node above the last stored level is
 // the union of the stored nodes it covers, or, when that is more than kMaxFold nodes

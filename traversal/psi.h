@@ -1,7 +1,7 @@
 // The ray's curve in texture space (RMIP paper §4.2, Eq. 3-4).
 //
 // Everything here works in *local sample coordinates* (X, Y): the sample coordinates of
-// DESIGN §1 (s = tiling ⊙ uv ⊙ (W,H) − ½, texel centres at integers, grid cells
+// docs/design.md §1 (s = tiling ⊙ uv ⊙ (W,H) − ½, texel centres at integers, grid cells
 // [i,i+1]×[j,j+1]) minus an integer origin near T. Cells keep integer bounds and the
 // numbers stay small whatever the tiling. Barycentrics b = (1−u−v, u, v), texture
 // coordinates, P and N are all affine in (X, Y) (LocalFrame), so
@@ -20,7 +20,7 @@
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/triangle.h"
-#include "render/traversal/patch_math.h"
+#include "core/kernels/patch_math.h"
 
 #include <cmath>
 

@@ -6,7 +6,7 @@
 #pragma once
 
 #include "core/registry.h"
-#include "render/intersector.h"
+#include "traversal/intersector.h"
 
 #include <nlohmann/json.hpp>
 

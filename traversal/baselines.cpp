@@ -1,7 +1,7 @@
 // Two baselines that share the traversal's micro-geometry: "bruteforce", the oracle
 // (every micro-triangle, no pruning), and "fixedstep", PDM-style constant-step marching
 // (Hoetzlein 2025, §4.2; approximate). See docs/traversal.md; "tfdm" is in tfdm.cpp.
-#include "render/traversal/traversal.h"
+#include "traversal/traversal.h"
 
 #include "core/error.h"
 #include "core/lod.h"

@@ -1,4 +1,4 @@
-// Conservative world box of the micro-geometry over a uv rectangle (DESIGN invariant 2;
+// Conservative world box of the micro-geometry over a uv rectangle (docs/design.md invariant 2;
 // RMIP Alg. 1 line 12, "surface bounds(triangle, bound, rmip)").
 //
 // The caller passes the rectangle already snapped outward to whole grid cells (the
@@ -17,8 +17,8 @@
 // never converted to float (the ray/box test runs in double).
 #pragma once
 
-#include "render/traversal/prism.h"
-#include "render/traversal/psi.h"
+#include "traversal/prism.h"
+#include "traversal/psi.h"
 
 namespace oblong {
 

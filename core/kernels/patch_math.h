@@ -1,12 +1,12 @@
 // Per-patch math shared word for word by the CPU traversal and the Vulkan shaders: this
-// file compiles as C++ (included by render/traversal/psi.h, functions in
+// file compiles as C++ (included by traversal/psi.h, functions in
 // oblong::shared) and as GLSL (included by render/vulkan/shaders/traversal.glsl, which
 // defines finiteD, copysignD and kInfD before it). Only the common subset of the two
 // languages is used: scalars and fixed arrays, `OBLONG_OUT` for GLSL's out parameters
 // (C++ arrays are passed by pointer), `OBLONG_PRECISE` for GLSL's `precise` (no fused or
 // reordered arithmetic, as the CPU's strict IEEE double). An unsuffixed literal is a
 // float in GLSL; glslang folds its conversion to double from the literal's own double
-// value (render/traversal/constants.h), so both sides use the same constants.
+// value (core/kernels/constants.h), so both sides use the same constants.
 //
 // Functions move here from psi.h, prism.cpp, rect_bounds.h and the shaders one at a
 // time; the parity test (tests/vulkan_test.cpp) checks the rest of the mirror.
