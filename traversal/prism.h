@@ -33,6 +33,7 @@
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/triangle.h"
+#include "core/kernels/rect_bounds.h"
 #include "traversal/psi.h"
 
 namespace oblong {
@@ -50,18 +51,9 @@ struct BoxD {
     hi += dvec3(e);
   }
   BoxD intersect(const BoxD& o) const { return {glm::max(lo, o.lo), glm::min(hi, o.hi)}; }
-  // Slab test in double: [t0, t1] ∩ [lo, hi] (t0 > t1 when missed).
+  // Slab test in double: [t0, t1] ∩ [lo, hi] (t0 > t1 when missed); core/kernels/rect_bounds.h.
   void clip(const dvec3& O, const dvec3& invD, double& t0, double& t1) const {
-    for (int k = 0; k < 3; ++k) {
-      if (std::isinf(invD[k])) {  // parallel to the slab
-        if (O[k] < lo[k] || O[k] > hi[k]) t0 = std::numeric_limits<double>::infinity();
-        continue;
-      }
-      double a = (lo[k] - O[k]) * invD[k], b = (hi[k] - O[k]) * invD[k];
-      if (a > b) std::swap(a, b);
-      t0 = std::max(t0, a);
-      t1 = std::min(t1, b);
-    }
+    shared::clipBox(lo, hi, O, invD, t0, t1);
   }
   AABB toFloatOutward() const;  // rounded outward to float
 };

@@ -1,45 +1,101 @@
-// Per-patch math shared word for word by the CPU traversal and the Vulkan shaders: this
-// file compiles as C++ (included by traversal/psi.h, functions in
-// oblong::shared) and as GLSL (included by render/vulkan/shaders/traversal.glsl, which
-// defines finiteD, copysignD and kInfD before it). Only the common subset of the two
-// languages is used: scalars and fixed arrays, `OBLONG_OUT` for GLSL's out parameters
-// (C++ arrays are passed by pointer), `OBLONG_PRECISE` for GLSL's `precise` (no fused or
-// reordered arithmetic, as the CPU's strict IEEE double). An unsuffixed literal is a
-// float in GLSL; glslang folds its conversion to double from the literal's own double
-// value (core/kernels/constants.h), so both sides use the same constants.
+// Per-patch math of the traversal (RMIP paper §4.2, Eq. 3-4), written once for the CPU
+// (traversal/psi.h, traversal/ray_patch.h) and the Vulkan shaders (traversal.glsl), in
+// the subset of core/kernels/lang.h.
 //
-// Functions move here from psi.h, prism.cpp, rect_bounds.h and the shaders one at a
-// time; the parity test (tests/vulkan_test.cpp) checks the rest of the mirror.
-#ifndef OBLONG_TRAVERSAL_PATCH_MATH_H
-#define OBLONG_TRAVERSAL_PATCH_MATH_H
+// Everything works in *local sample coordinates* (X, Y): the sample coordinates of
+// docs/design.md §1 (s = tiling ⊙ uv ⊙ (W,H) − ½, texel centres at integers, grid cells
+// [i,i+1]×[j,j+1]) minus an integer origin near T. Barycentrics b = (u, v), P and N are
+// affine in (X, Y) (PatchFrame), so ψ(X,Y) = det(P(X,Y) − O, N(X,Y), D) is a quadratic
+// in (X, Y); its zero set (a conic) is the projection of the whole ray line along the
+// displacement directions. ψ_X = 0 and ψ_Y = 0 are lines; where the conic meets them the
+// curve's Y (resp. X) is stationary: the turning points. Between consecutive turning
+// points the curve is monotone in X and Y, so the rectangle spanned by a piece's
+// endpoints bounds it (Patterson et al. 1991). All in double: per ray and prism, not per
+// step.
+#ifndef OBLONG_KERNELS_PATCH_MATH_H
+#define OBLONG_KERNELS_PATCH_MATH_H
 
-#ifdef __cplusplus
-#include <algorithm>
-#include <cmath>
-#include <limits>
-namespace oblong::shared {
-using std::abs;
-using std::max;
-using std::min;
-using std::sqrt;
-inline bool finiteD(double x) { return std::isfinite(x); }
-inline double copysignD(double m, double s) { return std::copysign(m, s); }
-constexpr double kInfD = std::numeric_limits<double>::infinity();
-#define OBLONG_INLINE inline
-#define OBLONG_OUT
-#define OBLONG_PRECISE
-#else
-#define OBLONG_INLINE
-#define OBLONG_OUT out
-#define OBLONG_PRECISE precise
-#endif
+#include "core/kernels/lang.h"
+
+OBLONG_KERNELS_BEGIN
+
+// Affine maps of one base triangle over local sample coordinates (LocalFrame::make builds
+// it on the host; the GPU reads it from TriGpu).
+struct PatchFrame {
+  dvec2 bc, bX, bY;  // barycentrics (u, v) = bc + bX X + bY Y
+  dvec2 sc, sU, sV;  // local sample coordinates (X, Y) = sc + sU u + sV v
+  // World quantities: P = p0 + e1 u + e2 v, N = n0 + f1 u + f2 v (N not normalised).
+  dvec3 p0, e1, e2, n0, f1, f2;
+  // The same over (X, Y): P = Pc + PX X + PY Y, N = Nc + NX X + NY Y.
+  dvec3 Pc, PX, PY, Nc, NX, NY;
+};
+
+OBLONG_INLINE dvec2 frameBary(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec2) p) {
+  OBLONG_PRECISE dvec2 r = F.bc + F.bX * p.x + F.bY * p.y;
+  return r;
+}
+OBLONG_INLINE dvec2 frameLocal(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec2) b) {
+  OBLONG_PRECISE dvec2 r = F.sc + F.sU * b.x + F.sV * b.y;
+  return r;
+}
+OBLONG_INLINE dvec3 frameP(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec2) b) {
+  OBLONG_PRECISE dvec3 r = F.p0 + F.e1 * b.x + F.e2 * b.y;
+  return r;
+}
+OBLONG_INLINE dvec3 frameN(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec2) b) {
+  OBLONG_PRECISE dvec3 r = F.n0 + F.f1 * b.x + F.f2 * b.y;
+  return r;
+}
+
+// ψ over local sample coordinates: c0 + cX X + cY Y + cXX X² + cXY XY + cYY Y².
+struct Psi {
+  double c0, cX, cY, cXX, cXY, cYY;
+};
+
+OBLONG_INLINE Psi psiMake(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D) {
+  // D · (A × N) with A = P − O affine, N affine.
+  OBLONG_PRECISE dvec3 A0 = F.Pc - O;
+  Psi p;
+  p.c0 = dotD(D, crossD(A0, F.Nc));
+  p.cX = dotD(D, crossD(A0, F.NX) + crossD(F.PX, F.Nc));
+  p.cY = dotD(D, crossD(A0, F.NY) + crossD(F.PY, F.Nc));
+  p.cXX = dotD(D, crossD(F.PX, F.NX));
+  p.cYY = dotD(D, crossD(F.PY, F.NY));
+  p.cXY = dotD(D, crossD(F.PX, F.NY) + crossD(F.PY, F.NX));
+  return p;
+}
+OBLONG_INLINE double psiEval(OBLONG_IN(Psi) s, OBLONG_IN(dvec2) p) {
+  OBLONG_PRECISE double r = s.c0 + p.x * (s.cX + s.cXX * p.x + s.cXY * p.y) + p.y * (s.cY + s.cYY * p.y);
+  return r;
+}
+OBLONG_INLINE dvec2 psiGrad(OBLONG_IN(Psi) s, OBLONG_IN(dvec2) p) {
+  OBLONG_PRECISE dvec2 r = dvec2(s.cX + 2.0 * s.cXX * p.x + s.cXY * p.y, s.cY + s.cXY * p.x + 2.0 * s.cYY * p.y);
+  return r;
+}
+// ψ on the line {axis = c} as a quadratic q2 w² + q1 w + q0 in the other coordinate w.
+OBLONG_INLINE void psiOnLine(OBLONG_IN(Psi) s, int axis, double c, OBLONG_OUT(double) q2, OBLONG_OUT(double) q1,
+                             OBLONG_OUT(double) q0) {
+  OBLONG_PRECISE double a2, a1, a0;
+  if (axis == 0) {
+    a2 = s.cYY;
+    a1 = s.cY + s.cXY * c;
+    a0 = s.c0 + c * (s.cX + s.cXX * c);
+  } else {
+    a2 = s.cXX;
+    a1 = s.cX + s.cXY * c;
+    a0 = s.c0 + c * (s.cY + s.cYY * c);
+  }
+  q2 = a2;
+  q1 = a1;
+  q0 = a0;
+}
 
 // Real roots of q2 w² + q1 w + q0 (stable formulas; a slightly negative discriminant
 // counts as a double root). pad[k] bounds the error of root k: an error δ of the
 // polynomial's value (coefficients rounded relative 1e-13) moves a simple root by
 // δ / |q'(w)|, a double root by at most √(δ / |q2|). Returns the count (0..2); a
 // quadratic that vanishes identically returns -1.
-OBLONG_INLINE int quadraticRoots(double q2, double q1, double q0, OBLONG_OUT double w[2], OBLONG_OUT double pad[2]) {
+OBLONG_INLINE int quadraticRoots(double q2, double q1, double q0, OBLONG_OUT_ARRAY double w[2], OBLONG_OUT_ARRAY double pad[2]) {
   w[0] = 0.0;
   w[1] = 0.0;
   pad[0] = 0.0;
@@ -81,11 +137,82 @@ OBLONG_INLINE int quadraticRoots(double q2, double q1, double q0, OBLONG_OUT dou
   return n;
 }
 
-#undef OBLONG_INLINE
-#undef OBLONG_OUT
-#undef OBLONG_PRECISE
-#ifdef __cplusplus
-}  // namespace oblong::shared
-#endif
+
+// The ray parameter t and prism coordinate s where the displacement line through the
+// local point p comes closest to the ray (they meet when ψ(p) = 0): least squares on
+// O + tD = P(p) + s N(p). False when the two lines are parallel (ray along N).
+OBLONG_INLINE bool rayParamAt(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, OBLONG_IN(dvec2) p,
+                              OBLONG_OUT(double) t, OBLONG_OUT(double) s) {
+  t = 0.0;
+  s = 0.0;
+  dvec2 b = frameBary(F, p);
+  OBLONG_PRECISE dvec3 A = frameP(F, b) - O;
+  dvec3 N = frameN(F, b);
+  OBLONG_PRECISE double dd = dotD(D, D), nn = dotD(N, N), dn = dotD(D, N);
+  OBLONG_PRECISE double den = dd * nn - dn * dn;
+  if (!(den > 1e-24 * dd * nn)) return false;
+  OBLONG_PRECISE double da = dotD(D, A), na = dotD(N, A);
+  // minimise |tD − sN − A|²: [dd, −dn; −dn, nn] [t; s] = [da; −na]
+  OBLONG_PRECISE double tt = (nn * da - dn * na) / den, ss = (dn * da - dd * na) / den;
+  t = tt;
+  s = ss;
+  return finiteD(t) && finiteD(s);
+}
+
+// The initial split (paper Alg. 1 line 5): ray parameters in (tIn, tOut) where the curve
+// may turn, sorted and distinct. Candidates are the points of the conic ψ = 0 on the
+// lines ψ_X = 0 and ψ_Y = 0 (other branches of the conic show up too), each taken to the
+// ray by rayParamAt. The caller finds the curve's point at each (by inversion) and splits
+// [tIn, tOut] there into pieces that are monotone in X and Y. Returns the count (≤ 4).
+OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
+                                 double tIn, double tOut, OBLONG_OUT_ARRAY double ts[4]) {
+  for (int k = 0; k < 4; ++k) ts[k] = 0.0;
+  int m = 0;
+  for (int L = 0; L < 2; ++L) {
+    // Line a X + b Y + c = 0: ψ_X = 0 is (2cXX, cXY, cX); ψ_Y = 0 is (cXY, 2cYY, cY).
+    OBLONG_PRECISE double a = L == 0 ? 2.0 * psi.cXX : psi.cXY, b = L == 0 ? psi.cXY : 2.0 * psi.cYY,
+                          c = L == 0 ? psi.cX : psi.cY;
+    OBLONG_PRECISE double nn = a * a + b * b;
+    if (!(nn > 0.0)) continue;  // ψ_X (or ψ_Y) constant: no turning point of that kind
+    OBLONG_PRECISE dvec2 Q = -c / nn * dvec2(a, b);
+    OBLONG_PRECISE dvec2 R = dvec2(-b, a) / sqrt(nn);
+    // ψ(Q + τ R) = ψ(Q) + τ ∇ψ(Q)·R + τ² Rᵀ H R / 2, H = [[2cXX, cXY], [cXY, 2cYY]].
+    OBLONG_PRECISE double q0 = psiEval(psi, Q);
+    OBLONG_PRECISE dvec2 g = psiGrad(psi, Q);
+    OBLONG_PRECISE double q1 = g.x * R.x + g.y * R.y;
+    OBLONG_PRECISE double q2 = psi.cXX * R.x * R.x + psi.cXY * R.x * R.y + psi.cYY * R.y * R.y;
+    double tau[2], pad[2];
+    int nr = quadraticRoots(q2, q1, q0, tau, pad);
+    for (int k = 0; k < nr; ++k) {
+      OBLONG_PRECISE dvec2 cand = Q + tau[k] * R;
+      double t, s;
+      if (!rayParamAt(F, O, D, cand, t, s)) continue;
+      if (t > tIn && t < tOut) ts[m++] = t;
+    }
+  }
+  for (int i = 1; i < m; ++i)  // insertion sort (m <= 4)
+    for (int j = i; j > 0 && ts[j] < ts[j - 1]; --j) {
+      double x = ts[j];
+      ts[j] = ts[j - 1];
+      ts[j - 1] = x;
+    }
+  int u = 0;
+  for (int i = 0; i < m; ++i)
+    if (u == 0 || ts[i] != ts[u - 1]) ts[u++] = ts[i];
+  return u;
+}
+
+// Approximate direction of a ray's texture-space curve in local sample coordinates
+// (ordering only: front-to-back order in the traversal, child order in tfdm): the ray
+// direction solved in the frame (PX, PY, N) at T's centroid, N = frameN(F, (1/3, 1/3))
+// (computed by the caller: 1.0 / 3.0 is a float quotient in GLSL).
+OBLONG_INLINE dvec2 approxDirLocal(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) N, OBLONG_IN(dvec3) dir) {
+  OBLONG_PRECISE double det = dotD(F.PX, crossD(F.PY, N));
+  if (!(abs(det) > 0.0)) return dvec2(1.0);
+  OBLONG_PRECISE dvec2 r = dvec2(dotD(dir, crossD(F.PY, N)) / det, dotD(F.PX, crossD(dir, N)) / det);
+  return r;
+}
+
+OBLONG_KERNELS_END
 
 #endif

@@ -22,11 +22,16 @@
 // runLoop.
 
 #include "core/kernels/constants.h"  // shared with the CPU traversal and inversion/newton.h
+// The per-patch kernels, the CPU's own code (core/kernels/, docs/architecture.md).
+#include "core/kernels/lang.h"
+#include "core/kernels/patch_math.h"
+#include "core/kernels/rect_bounds.h"
 
 #define kInfF uintBitsToFloat(0x7f800000u)
-#define kInfD double(kInfF)
 
 // ---- per invocation state (RayPatch's members; g_tri, g_mesh in prism.rint) ----------
+PatchFrame g_F;  // the triangle's frame (core/kernels/patch_math.h), from TRI in initPatch
+Psi g_psi;
 float g_tmin, g_tmax;             // the ray's [tmin, tmax] (float, as Ray)
 dvec3 g_O, g_D, g_invD;
 dvec3 g_boxLo, g_boxHi;           // prismBox_
@@ -55,24 +60,6 @@ void testMicro(MicroVertex v0, MicroVertex v1, MicroVertex v2) {
     g_hv1 = v1;
     g_hv2 = v2;
     g_hb = b;
-  }
-}
-
-// ---- BoxD::clip (slab test in double) -------------------------------------------------
-void clipBox(dvec3 lo, dvec3 hi, inout double t0, inout double t1) {
-  for (int k = 0; k < 3; ++k) {
-    if (isinf(g_invD[k])) {
-      if (g_O[k] < lo[k] || g_O[k] > hi[k]) t0 = kInfD;
-      continue;
-    }
-    precise double a = (lo[k] - g_O[k]) * g_invD[k], b = (hi[k] - g_O[k]) * g_invD[k];
-    if (a > b) {
-      double s = a;
-      a = b;
-      b = s;
-    }
-    t0 = t0 < a ? a : t0;  // std::max
-    t1 = b < t1 ? b : t1;  // std::min
   }
 }
 
@@ -175,49 +162,11 @@ vec2 toHeight(vec2 raw) {
   return vec2(min(a, b), max(a, b));
 }
 
-// ---- boxOverRect (traversal/rect_bounds.h) -----------------------------------------------
-void boxOverRect(double m, dvec2 lo, dvec2 hi, double hlo, double hhi, double pad, out dvec3 blo, out dvec3 bhi) {
-  precise dvec3 Nlo, Nhi;
-  for (int k = 0; k < 3; ++k) {
-    precise double px0 = TRI.PX[k] * lo.x, px1 = TRI.PX[k] * hi.x, py0 = TRI.PY[k] * lo.y, py1 = TRI.PY[k] * hi.y;
-    blo[k] = TRI.Pc[k] + min(px0, px1) + min(py0, py1);
-    bhi[k] = TRI.Pc[k] + max(px0, px1) + max(py0, py1);
-    precise double nx0 = TRI.NX[k] * lo.x, nx1 = TRI.NX[k] * hi.x, ny0 = TRI.NY[k] * lo.y, ny1 = TRI.NY[k] * hi.y;
-    Nlo[k] = TRI.Nc[k] + min(nx0, nx1) + min(ny0, ny1);
-    Nhi[k] = TRI.Nc[k] + max(nx0, nx1) + max(ny0, ny1);
-  }
-  precise double d2 = 0.0, c2 = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    precise double g = max(max(0.0, Nlo[k]), -Nhi[k]);
-    d2 += g * g;
-    precise double c = max(abs(Nlo[k]), abs(Nhi[k]));
-    c2 += c * c;
-  }
-  precise double nMin = max(m, sqrt(d2)) * (1.0 - 1e-12);
-  precise double nMax = min(1.0, sqrt(c2)) * (1.0 + 1e-12);
-  precise double klo = hlo < 0.0 ? hlo / nMin : hlo / nMax;
-  precise double khi = hhi > 0.0 ? hhi / nMin : hhi / nMax;
-  for (int k = 0; k < 3; ++k) {
-    precise double a = klo * Nlo[k], b = klo * Nhi[k], c = khi * Nlo[k], d = khi * Nhi[k];
-    blo[k] += min(min(a, b), min(c, d));
-    bhi[k] += max(max(a, b), max(c, d));
-  }
-  precise double mag = max(max(max(abs(blo.x), abs(blo.y)), max(abs(blo.z), abs(bhi.x))), max(abs(bhi.y), abs(bhi.z)));
-  precise double p = pad + 1e-14 * mag;
-  blo -= dvec3(p);
-  bhi += dvec3(p);
-}
-
 // ---- RayPatch helpers -----------------------------------------------------------------
 double slack(double t) { return OBLONG_TRAV_SLACK_REL * abs(t) + g_tAbs; }
 double bestLimit() { return g_found ? double(g_hitT) + slack(double(g_hitT)) : double(g_tmax) + slack(double(g_tmax)); }
 
-dvec2 dirLocal() {
-  dvec3 N = TRI.N13;
-  precise double det = dot(TRI.PX, cross(TRI.PY, N));
-  if (!(abs(det) > 0.0)) return dvec2(1.0);
-  return dvec2(dot(g_D, cross(TRI.PY, N)) / det, dot(TRI.PX, cross(g_D, N)) / det);
-}
+dvec2 dirLocal() { return approxDirLocal(g_F, TRI.N13, g_D); }
 
 // clipToCells: the ray interval through the box of the micro-geometry over local cells.
 bool clipToCells(ivec2 clo, ivec2 chi, inout double t0, inout double t1) {
@@ -226,12 +175,12 @@ bool clipToCells(ivec2 clo, ivec2 chi, inout double t0, inout double t1) {
   vec2 h = toHeight(rangeRaw(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
   dvec2 lo = max(dvec2(clo), g_sbLo), hi = min(dvec2(chi + 1), g_sbHi);
   dvec3 blo, bhi;
-  boxOverRect(double(TRI.minNormalLength), lo, hi, double(h.x), double(h.y), g_boxPad, blo, bhi);
+  boxOverRect(TRI.Pc, TRI.PX, TRI.PY, TRI.Nc, TRI.NX, TRI.NY, double(TRI.minNormalLength), lo, hi, double(h.x), double(h.y), g_boxPad, blo, bhi);
   blo = max(blo, g_boxLo);
   bhi = min(bhi, g_boxHi);
   ++g_boxes;
   if (blo.x > bhi.x || blo.y > bhi.y || blo.z > bhi.z) return false;
-  clipBox(blo, bhi, t0, t1);
+  clipBox(blo, bhi, g_O, g_invD, t0, t1);
   return t0 <= t1;
 }
 
@@ -240,132 +189,7 @@ void testCell(int i, int j) {
   g_microTris += microCell(i + TRI.origin.x, j + TRI.origin.y);
 }
 
-// ---- doubles as glm computes them ------------------------------------------------------
-double dotD(dvec3 a, dvec3 b) {
-  precise double r = a.x * b.x + a.y * b.y + a.z * b.z;
-  return r;
-}
-dvec3 crossD(dvec3 x, dvec3 y) {
-  precise dvec3 r = dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
-  return r;
-}
 double det3D(dvec3 a, dvec3 b, dvec3 c) { return dotD(a, crossD(b, c)); }
-double lengthD(dvec3 v) { return sqrt(dotD(v, v)); }
-bool finiteD(double x) { return !isinf(x) && !isnan(x); }
-double copysignD(double m, double s) {  // std::copysign
-  bool neg = (unpackDouble2x32(s).y & 0x80000000u) != 0u;
-  return neg ? -abs(m) : abs(m);
-}
-
-// LocalFrame (traversal/psi.h)
-dvec2 frameBary(dvec2 p) {
-  precise dvec2 r = TRI.bc + TRI.bX * p.x + TRI.bY * p.y;
-  return r;
-}
-dvec2 frameLocal(dvec2 b) {
-  precise dvec2 r = TRI.sc + TRI.sU * b.x + TRI.sV * b.y;
-  return r;
-}
-dvec3 frameP(dvec2 b) {
-  precise dvec3 r = TRI.p0d + TRI.e1 * b.x + TRI.e2 * b.y;
-  return r;
-}
-dvec3 frameN(dvec2 b) {
-  precise dvec3 r = TRI.n0d + TRI.f1 * b.x + TRI.f2 * b.y;
-  return r;
-}
-
-// ---- quadraticRoots: the CPU's own code (core/kernels/patch_math.h) -------------------------
-#include "core/kernels/patch_math.h"
-
-// ---- ψ (traversal/psi.h Psi) --------------------------------------------------------------
-double g_c0, g_cX, g_cY, g_cXX, g_cXY, g_cYY;
-
-void psiMake() {
-  precise dvec3 A0 = TRI.Pc - g_O;
-  g_c0 = dotD(g_D, crossD(A0, TRI.Nc));
-  g_cX = dotD(g_D, crossD(A0, TRI.NX) + crossD(TRI.PX, TRI.Nc));
-  g_cY = dotD(g_D, crossD(A0, TRI.NY) + crossD(TRI.PY, TRI.Nc));
-  g_cXX = dotD(g_D, crossD(TRI.PX, TRI.NX));
-  g_cYY = dotD(g_D, crossD(TRI.PY, TRI.NY));
-  g_cXY = dotD(g_D, crossD(TRI.PX, TRI.NY) + crossD(TRI.PY, TRI.NX));
-}
-double psiEval(dvec2 p) {
-  precise double r = g_c0 + p.x * (g_cX + g_cXX * p.x + g_cXY * p.y) + p.y * (g_cY + g_cYY * p.y);
-  return r;
-}
-dvec2 psiGrad(dvec2 p) {
-  precise dvec2 r = dvec2(g_cX + 2.0 * g_cXX * p.x + g_cXY * p.y, g_cY + g_cXY * p.x + 2.0 * g_cYY * p.y);
-  return r;
-}
-void psiOnLine(int axis, double c, out double q2, out double q1, out double q0) {
-  precise double a2, a1, a0;
-  if (axis == 0) {
-    a2 = g_cYY;
-    a1 = g_cY + g_cXY * c;
-    a0 = g_c0 + c * (g_cX + g_cXX * c);
-  } else {
-    a2 = g_cXX;
-    a1 = g_cX + g_cXY * c;
-    a0 = g_c0 + c * (g_cY + g_cYY * c);
-  }
-  q2 = a2;
-  q1 = a1;
-  q0 = a0;
-}
-
-// rayParamAt: t and s where the displacement line through local p comes closest to the ray.
-bool rayParamAt(dvec2 p, out double t, out double s) {
-  t = 0.0;
-  s = 0.0;
-  dvec2 b = frameBary(p);
-  precise dvec3 A = frameP(b) - g_O;
-  dvec3 N = frameN(b);
-  precise double dd = dotD(g_D, g_D), nn = dotD(N, N), dn = dotD(g_D, N);
-  precise double den = dd * nn - dn * dn;
-  if (!(den > 1e-24 * dd * nn)) return false;
-  precise double da = dotD(g_D, A), na = dotD(N, A);
-  precise double tt = (nn * da - dn * na) / den, ss = (dn * da - dd * na) / den;
-  t = tt;
-  s = ss;
-  return finiteD(t) && finiteD(s);
-}
-
-// monotoneSplits with turningPoints: sorted ray parameters in (tIn, tOut) where the
-// curve may turn.
-int monotoneSplits(double tIn, double tOut, out double ts[4]) {
-  for (int k = 0; k < 4; ++k) ts[k] = 0.0;
-  int m = 0;
-  for (int L = 0; L < 2; ++L) {
-    precise double a = L == 0 ? 2.0 * g_cXX : g_cXY, b = L == 0 ? g_cXY : 2.0 * g_cYY, c = L == 0 ? g_cX : g_cY;
-    precise double nn = a * a + b * b;
-    if (!(nn > 0.0)) continue;
-    precise dvec2 Q = -c / nn * dvec2(a, b);
-    precise dvec2 R = dvec2(-b, a) / sqrt(nn);
-    precise double q0 = psiEval(Q);
-    precise dvec2 g = psiGrad(Q);
-    precise double q1 = g.x * R.x + g.y * R.y;
-    precise double q2 = g_cXX * R.x * R.x + g_cXY * R.x * R.y + g_cYY * R.y * R.y;
-    double tau[2], pad[2];
-    int nr = quadraticRoots(q2, q1, q0, tau, pad);
-    for (int k = 0; k < nr; ++k) {
-      precise dvec2 cand = Q + tau[k] * R;
-      double t, s;
-      if (!rayParamAt(cand, t, s)) continue;
-      if (t > tIn && t < tOut) ts[m++] = t;
-    }
-  }
-  for (int i = 1; i < m; ++i)
-    for (int j = i; j > 0 && ts[j] < ts[j - 1]; --j) {
-      double x = ts[j];
-      ts[j] = ts[j - 1];
-      ts[j - 1] = x;
-    }
-  int u = 0;
-  for (int i = 0; i < m; ++i)
-    if (u == 0 || ts[i] != ts[u - 1]) ts[u++] = ts[i];
-  return u;
-}
 
 // ---- the inflated prism and its crossings (traversal/prism.cpp Prism) -------------------
 dvec3 g_pq[3], g_pn[3];
@@ -378,8 +202,8 @@ void makePrism(double a, double b, double delta) {
   g_pbv[1] = dvec2(1.0 + 2.0 * delta, -delta);
   g_pbv[2] = dvec2(-delta, 1.0 + 2.0 * delta);
   for (int k = 0; k < 3; ++k) {
-    g_pq[k] = frameP(g_pbv[k]);
-    g_pn[k] = frameN(g_pbv[k]);
+    g_pq[k] = frameP(g_F, g_pbv[k]);
+    g_pn[k] = frameN(g_F, g_pbv[k]);
   }
   g_pa = a;
   g_pb = b;
@@ -505,14 +329,14 @@ bool makePoint(double t, dvec2 b, double s, out CurvePoint outp) {
   if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1.0 + dom)) return false;
   if (!(s >= TRI.domainS0 && s <= TRI.domainS1)) return false;
   precise dvec3 X = g_O + t * g_D;
-  precise dvec3 G = frameP(b) + s * frameN(b);
+  precise dvec3 G = frameP(g_F, b) + s * frameN(g_F, b);
   double mag = max(max(max(abs(X.x), abs(X.y)), max(abs(X.z), abs(G.x))), max(abs(G.y), abs(G.z)));
   precise double r = lengthD(G - X) + OBLONG_TRAV_RESIDUAL_ROUND * mag;
   precise dvec2 db = TRI.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
   if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
       !(TRI.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (TRI.domainS1 - TRI.domainS0) + OBLONG_TRAV_TINY))
     return false;
-  outp.uv = frameLocal(b);
+  outp.uv = frameLocal(g_F, b);
   precise dvec2 pad = TRI.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + abs(outp.uv));
   outp.pad = pad;
   return finiteD(outp.uv.x) && finiteD(outp.uv.y);
@@ -731,7 +555,7 @@ bool invertAt(double t, out CurvePoint outp) {
   float h;
   invertFloat(vec3(X), bary, h);
   dvec2 b = dvec2(bary);
-  double nl = lengthD(frameN(b));
+  double nl = lengthD(frameN(g_F, b));
   if (!(nl > 0.0) || isinf(h) || isnan(h)) return false;
   return makePoint(t, b, double(h) / nl, outp);
 }
@@ -741,7 +565,7 @@ bool invertAt(double t, out CurvePoint outp) {
 bool crossingAt(CurvePoint pa, CurvePoint pb, int axis, double c, out CurvePoint outp) {
   outp = pa;
   double q2, q1, q0, w[2], rp[2];
-  psiOnLine(axis, c, q2, q1, q0);
+  psiOnLine(g_psi, axis, c, q2, q1, q0);
   int n = quadraticRoots(q2, q1, q0, w, rp);
   if (n <= 0) return false;
   int mi = 1 - axis;
@@ -751,10 +575,10 @@ bool crossingAt(CurvePoint pa, CurvePoint pb, int axis, double c, out CurvePoint
     if (w[k] < lo[mi] - rp[k] || w[k] > hi[mi] + rp[k]) continue;
     dvec2 uv = axis == 0 ? dvec2(c, w[k]) : dvec2(w[k], c);
     double t, s;
-    if (!rayParamAt(uv, t, s)) continue;
+    if (!rayParamAt(g_F, g_O, g_D, uv, t, s)) continue;
     if (!(t > pa.t && t < pb.t)) continue;
     CurvePoint cp;
-    if (!makePoint(t, frameBary(uv), s, cp)) continue;
+    if (!makePoint(t, frameBary(g_F, uv), s, cp)) continue;
     outp = cp;
     ++found;
   }
@@ -850,11 +674,11 @@ bool pointBetween(CurvePoint a, CurvePoint b, double t, out CurvePoint outp) {
   outp = CurvePoint(t, dvec2(0.0), dvec2(0.0));
   precise double tau = (t - a.t) / (b.t - a.t);
   precise dvec2 g = a.uv + tau * (b.uv - a.uv);
-  dvec2 bc = frameBary(g);
+  dvec2 bc = frameBary(g_F, g);
   precise dvec3 X = g_O + t * g_D;
-  dvec3 N = frameN(bc);
-  precise double s = dotD(X - frameP(bc), N) / dotD(N, N);
-  precise dvec3 r = X - (frameP(bc) + s * frameN(bc));
+  dvec3 N = frameN(g_F, bc);
+  precise double s = dotD(X - frameP(g_F, bc), N) / dotD(N, N);
+  precise dvec3 r = X - (frameP(g_F, bc) + s * frameN(g_F, bc));
   precise dvec3 Gu = TRI.e1 + s * TRI.f1, Gv = TRI.e2 + s * TRI.f2;
   dvec3 c0 = crossD(Gv, N), c1 = crossD(N, Gu), c2 = crossD(Gu, Gv);
   double det = dotD(Gu, c0);
@@ -873,10 +697,10 @@ bool pointFromHit(double t, out CurvePoint outp) {
   precise dvec2 uv = double(g_hb.x) * dvec2(g_hv0.uv) + double(g_hb.y) * dvec2(g_hv1.uv) +
                      double(g_hb.z) * dvec2(g_hv2.uv);
   precise dvec2 loc = toSample(uv) - dvec2(TRI.origin);
-  dvec2 b = frameBary(loc);
+  dvec2 b = frameBary(g_F, loc);
   precise dvec3 X = g_O + t * g_D;
-  dvec3 N = frameN(b);
-  precise double s = dotD(X - frameP(b), N) / dotD(N, N);
+  dvec3 N = frameN(g_F, b);
+  precise double s = dotD(X - frameP(g_F, b), N) / dotD(N, N);
   return makePoint(t, b, s, outp);
 }
 
@@ -916,7 +740,7 @@ void minorAt(double c, out double wlo, out double whi) {
     }
   }
   double q2, q1, q0, w[2], rp[2];
-  psiOnLine(ax, c, q2, q1, q0);
+  psiOnLine(g_psi, ax, c, q2, q1, q0);
   int n = quadraticRoots(q2, q1, q0, w, rp);
   if (n < 0) {
     wlo = lo[mi];
@@ -1115,7 +939,7 @@ void setupBoxOnly() {
   g_boxOnly = true;
   g_sp = 0;
   double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = bestLimit();
-  clipBox(g_boxLo, g_boxHi, t0, t1);
+  clipBox(g_boxLo, g_boxHi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return;
   g_dvd = dirLocal();
   pushBox(g_cellLo, g_cellHi, t0, t1);
@@ -1135,7 +959,7 @@ int setupCurve() {
   dvec3 plo, phi;
   prismBounds(pre ? TRI.vertexErr + rayErr : g_boxPad, plo, phi);
   double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = double(g_tmax) + slack(double(g_tmax));
-  clipBox(plo, phi, t0, t1);
+  clipBox(plo, phi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return 0;
   Crossing first, last;
   int nc = prismCrossings(first, last);
@@ -1144,10 +968,10 @@ int setupCurve() {
   double tIn = max(first.t, double(g_tmin) - slack(double(g_tmin)));
   double tOut = min(last.t, double(g_tmax) + slack(double(g_tmax)));
   if (!(tIn <= tOut)) return 0;
-  psiMake();
+  g_psi = psiMake(g_F, g_O, g_D);
   g_dvd = dirLocal();
   double ts[4];
-  int ns = monotoneSplits(tIn, tOut, ts);
+  int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, ts);
   // Curve points: the two ends (prism crossings; where the ray starts or ends inside,
   // claimed between the crossings' points or inverted), then the turning points.
   CurvePoint pts[6];
@@ -1199,7 +1023,7 @@ bool missesPrism() {
   precise double tAbs = double(OBLONG_TRAV_T_ABS_PADS) * TRI.budgetPad / lengthD(g_D);
   precise double t0 = double(g_tmin) - (OBLONG_TRAV_SLACK_REL * abs(double(g_tmin)) + tAbs);
   precise double t1 = double(g_tmax) + (OBLONG_TRAV_SLACK_REL * abs(double(g_tmax)) + tAbs);
-  clipBox(TRI.infPadLo, TRI.infPadHi, t0, t1);
+  clipBox(TRI.infPadLo, TRI.infPadHi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return true;
   if (TRI.obbValid == 0) return false;
   precise double slackO = OBLONG_TRAV_OBB_ROUND * (maxO + 1.0);
@@ -1234,6 +1058,24 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
   g_cellHi = TRI.cellHi;
   g_sbLo = TRI.sbLo;
   g_sbHi = TRI.sbHi;
+  g_F.bc = TRI.bc;
+  g_F.bX = TRI.bX;
+  g_F.bY = TRI.bY;
+  g_F.sc = TRI.sc;
+  g_F.sU = TRI.sU;
+  g_F.sV = TRI.sV;
+  g_F.p0 = TRI.p0d;
+  g_F.e1 = TRI.e1;
+  g_F.e2 = TRI.e2;
+  g_F.n0 = TRI.n0d;
+  g_F.f1 = TRI.f1;
+  g_F.f2 = TRI.f2;
+  g_F.Pc = TRI.Pc;
+  g_F.PX = TRI.PX;
+  g_F.PY = TRI.PY;
+  g_F.Nc = TRI.Nc;
+  g_F.NX = TRI.NX;
+  g_F.NY = TRI.NY;
   double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
   bool pre = maxO <= TRI.budget;
   // RayMargins::make(P, maxAbsVertex(T), maxO): this ray's own pads.

@@ -1,0 +1,95 @@
+// The common subset of C++ and GLSL that the headers of core/kernels/ are written in:
+// each of them compiles as C++ (functions in oblong::shared) and as GLSL (included by
+// render/vulkan/shaders/traversal.glsl), so a per-patch formula exists once for the CPU
+// traversal and the Vulkan shaders (docs/architecture.md, "The CPU/GPU contract").
+//
+// What the subset allows: scalars, glm vectors under GLSL's names (dvec3, ivec2, ...),
+// plain structs without initialisers or member functions, fixed arrays, and free
+// functions whose parameters are written with the macros below:
+//   OBLONG_IN(T)    a read-only argument    (C++ const T&, GLSL in T)
+//   OBLONG_OUT(T)   an out argument         (C++ T&,       GLSL out T)
+//   OBLONG_INOUT(T) an in-out argument      (C++ T&,       GLSL inout T)
+//   OBLONG_OUT_ARRAY before an array parameter that is written (GLSL out; C++ arrays
+//                   are passed by pointer)
+//   OBLONG_PRECISE  on every declaration whose arithmetic must not be fused or
+//                   reordered (GLSL precise; the CPU's strict IEEE double needs nothing)
+// min, max and abs are GLSL's on both sides (for scalars: y < x ? y : x, as std::min);
+// dotD and crossD are glm's formulas, which GLSL's built-ins need not follow. An
+// unsuffixed literal is a float in GLSL; glslang folds its conversion to double from the
+// literal's own double value, so both sides compute with the same constants.
+#ifndef OBLONG_KERNELS_LANG_H
+#define OBLONG_KERNELS_LANG_H
+
+#ifdef __cplusplus
+#include <glm/glm.hpp>
+
+#include <cmath>
+#include <limits>
+
+namespace oblong::shared {
+using glm::dvec2;
+using glm::dvec3;
+using glm::ivec2;
+using glm::vec2;
+using glm::vec3;
+// Scalars: non-templates, so that they win over glm's templates, which serve vectors.
+inline double min(double a, double b) { return b < a ? b : a; }
+inline double max(double a, double b) { return a < b ? b : a; }
+inline int min(int a, int b) { return b < a ? b : a; }
+inline int max(int a, int b) { return a < b ? b : a; }
+inline double abs(double x) { return std::abs(x); }
+inline double sqrt(double x) { return std::sqrt(x); }
+using glm::abs;
+using glm::max;
+using glm::min;
+inline bool finiteD(double x) { return std::isfinite(x); }
+inline bool isinfD(double x) { return std::isinf(x); }
+inline double copysignD(double m, double s) { return std::copysign(m, s); }
+constexpr double kInfD = std::numeric_limits<double>::infinity();
+inline double dotD(const dvec3& a, const dvec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline dvec3 crossD(const dvec3& x, const dvec3& y) {
+  return dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
+}
+inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
+}  // namespace oblong::shared
+
+#define OBLONG_KERNELS_BEGIN namespace oblong::shared {
+#define OBLONG_KERNELS_END }
+#define OBLONG_INLINE inline
+#define OBLONG_IN(T) const T&
+#define OBLONG_OUT(T) T&
+#define OBLONG_INOUT(T) T&
+#define OBLONG_OUT_ARRAY
+#define OBLONG_PRECISE
+
+#else  // GLSL
+
+#define OBLONG_KERNELS_BEGIN
+#define OBLONG_KERNELS_END
+#define OBLONG_INLINE
+#define OBLONG_IN(T) in T
+#define OBLONG_OUT(T) out T
+#define OBLONG_INOUT(T) inout T
+#define OBLONG_OUT_ARRAY out
+#define OBLONG_PRECISE precise
+
+#define kInfD double(uintBitsToFloat(0x7f800000u))
+bool finiteD(double x) { return !isinf(x) && !isnan(x); }
+bool isinfD(double x) { return isinf(x); }
+double copysignD(double m, double s) {  // std::copysign
+  bool neg = (unpackDouble2x32(s).y & 0x80000000u) != 0u;
+  return neg ? -abs(m) : abs(m);
+}
+double dotD(dvec3 a, dvec3 b) {
+  precise double r = a.x * b.x + a.y * b.y + a.z * b.z;
+  return r;
+}
+dvec3 crossD(dvec3 x, dvec3 y) {
+  precise dvec3 r = dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
+  return r;
+}
+double lengthD(dvec3 v) { return sqrt(dotD(v, v)); }
+
+#endif
+
+#endif
