@@ -11,12 +11,16 @@
 //   OBLONG_INOUT(T) an in-out argument      (C++ T&,       GLSL inout T)
 //   OBLONG_OUT_ARRAY before an array parameter that is written (GLSL out; C++ arrays
 //                   are passed by pointer)
+//   OBLONG_FORCE_INLINE on hot C++ paths (GLSL inlines every call anyway)
 //   OBLONG_PRECISE  on every declaration whose arithmetic must not be fused or
 //                   reordered (GLSL precise; the CPU's strict IEEE double needs nothing)
 // min, max and abs are GLSL's on both sides (for scalars: y < x ? y : x, as std::min);
 // dotD and crossD are glm's formulas, which GLSL's built-ins need not follow. An
-// unsuffixed literal is a float in GLSL; glslang folds its conversion to double from the
-// literal's own double value, so both sides compute with the same constants.
+// unsuffixed literal is a float in GLSL and a double in C++; glslang folds its conversion
+// to double from the literal's own double value, so in double expressions both sides use
+// the same constants. Float arithmetic takes the f suffix (1.0f), read as a float by both
+// languages; a quotient of literals (1.0 / 3.0) is folded in float by GLSL: compute such
+// values on the host.
 #ifndef OBLONG_KERNELS_LANG_H
 #define OBLONG_KERNELS_LANG_H
 
@@ -46,6 +50,7 @@ inline bool finiteD(double x) { return std::isfinite(x); }
 inline bool isinfD(double x) { return std::isinf(x); }
 inline double copysignD(double m, double s) { return std::copysign(m, s); }
 constexpr double kInfD = std::numeric_limits<double>::infinity();
+constexpr float kNaNF = std::numeric_limits<float>::quiet_NaN();
 inline double dotD(const dvec3& a, const dvec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline dvec3 crossD(const dvec3& x, const dvec3& y) {
   return dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
@@ -56,6 +61,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_KERNELS_BEGIN namespace oblong::shared {
 #define OBLONG_KERNELS_END }
 #define OBLONG_INLINE inline
+#define OBLONG_FORCE_INLINE [[gnu::always_inline]] inline
 #define OBLONG_IN(T) const T&
 #define OBLONG_OUT(T) T&
 #define OBLONG_INOUT(T) T&
@@ -67,6 +73,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_KERNELS_BEGIN
 #define OBLONG_KERNELS_END
 #define OBLONG_INLINE
+#define OBLONG_FORCE_INLINE
 #define OBLONG_IN(T) in T
 #define OBLONG_OUT(T) out T
 #define OBLONG_INOUT(T) inout T
@@ -74,6 +81,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_PRECISE precise
 
 #define kInfD double(uintBitsToFloat(0x7f800000u))
+#define kNaNF uintBitsToFloat(0x7fc00000u)
 bool finiteD(double x) { return !isinf(x) && !isnan(x); }
 bool isinfD(double x) { return isinf(x); }
 double copysignD(double m, double s) {  // std::copysign

@@ -3,12 +3,15 @@
 // against T's edges with the line bookkeeping, canonical edge evaluation; the CPU skips
 // the clips against edges whose half-plane holds the whole cell and reuses cached grid
 // points, which yields the same triangles bit for bit — the parity tests compare them
-// with this port, which clips against all three) and of
-// traversal/microtri.h's watertight ray/micro-triangle test. Every float and double
+// with this port, which clips against all three); the watertight ray/micro-triangle test
+// is the CPU's own (core/kernels/microtri.h). Every float and double
 // operation is `precise` (SPIR-V NoContraction): no fused multiply-add, so the
 // micro-vertices, edge functions and t come out as the CPU computes them, which both
 // watertightness and CPU/GPU parity rely on. Needs the globals of traversal.glsl:
-// g_tri, g_mesh, the ray (g_wr*) and the closest hit (g_hit*).
+// g_tri, g_mesh, the ray (g_wr) and the closest hit (g_hit*).
+
+#include "core/kernels/lang.h"
+#include "core/kernels/microtri.h"
 
 // ---- height map (core/heightmap.h) --------------------------------------------------
 int wrapIndex(int i, int n) {  // HeightMap::wrap; GLSL's % is undefined for negatives
@@ -356,68 +359,6 @@ int microCell(int i, int j) {
   return count;
 }
 
-// ---- watertight ray / micro-triangle test (traversal/microtri.h) -----------------------
-vec3 g_wrO, g_wrD;
-int g_wrKx, g_wrKy, g_wrKz;
-float g_wrSx, g_wrSy;
+// ---- watertight ray / micro-triangle test: the CPU's own code (core/kernels/microtri.h) --
+WatertightRay g_wr;
 
-void makeWatertightRay(vec3 o, vec3 d) {
-  g_wrO = o;
-  g_wrD = d;
-  vec3 ad = abs(d);
-  g_wrKz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
-  g_wrKx = (g_wrKz + 1) % 3;
-  g_wrKy = (g_wrKx + 1) % 3;
-  if (d[g_wrKz] < 0.0) {
-    int s = g_wrKx;
-    g_wrKx = g_wrKy;
-    g_wrKy = s;
-  }
-  precise float sx = -d[g_wrKx] / d[g_wrKz], sy = -d[g_wrKy] / d[g_wrKz];
-  g_wrSx = sx;
-  g_wrSy = sy;
-}
-
-// planeT: the ray's t at the triangle's plane, in double (NaN when the ray lies in it).
-float planeT(vec3 p0, vec3 p1, vec3 p2) {
-  precise double ax = double(p1.x) - double(p0.x), ay = double(p1.y) - double(p0.y), az = double(p1.z) - double(p0.z);
-  precise double bx = double(p2.x) - double(p0.x), by = double(p2.y) - double(p0.y), bz = double(p2.z) - double(p0.z);
-  precise double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
-  precise double qx = double(p0.x) - double(g_wrO.x), qy = double(p0.y) - double(g_wrO.y),
-                 qz = double(p0.z) - double(g_wrO.z);
-  precise double num = qx * nx + qy * ny + qz * nz;
-  precise double den = double(g_wrD.x) * nx + double(g_wrD.y) * ny + double(g_wrD.z) * nz;
-  if (den == 0.0) return uintBitsToFloat(0x7fc00000u);
-  precise double t = num / den;
-  return float(t);
-}
-
-// intersectMicro: hit with t in [tmin, tmax]? Writes t and the barycentrics.
-bool intersectMicro(vec3 p0, vec3 p1, vec3 p2, float tmin, float tmax, out float ht, out vec3 hb) {
-  precise vec3 A = p0 - g_wrO, B = p1 - g_wrO, C = p2 - g_wrO;
-  precise float Ax = A[g_wrKx] + g_wrSx * A[g_wrKz], Ay = A[g_wrKy] + g_wrSy * A[g_wrKz];
-  precise float Bx = B[g_wrKx] + g_wrSx * B[g_wrKz], By = B[g_wrKy] + g_wrSy * B[g_wrKz];
-  precise float Cx = C[g_wrKx] + g_wrSx * C[g_wrKz], Cy = C[g_wrKy] + g_wrSy * C[g_wrKz];
-  precise float U = Cx * By - Cy * Bx;
-  precise float V = Ax * Cy - Ay * Cx;
-  precise float W = Bx * Ay - By * Ax;
-  ht = 0.0;
-  hb = vec3(0.0);
-  if (U == 0.0 || V == 0.0 || W == 0.0) {
-    precise double u = double(Cx) * double(By) - double(Cy) * double(Bx);
-    precise double v = double(Ax) * double(Cy) - double(Ay) * double(Cx);
-    precise double w = double(Bx) * double(Ay) - double(By) * double(Ax);
-    U = float(u);
-    V = float(v);
-    W = float(w);
-  }
-  if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return false;
-  precise float det = U + V + W;
-  if (det == 0.0) return false;
-  precise float inv = 1.0 / det;
-  float t = planeT(p0, p1, p2);
-  if (!(t >= tmin && t <= tmax)) return false;
-  ht = t;
-  hb = vec3(U * inv, V * inv, W * inv);
-  return true;
-}

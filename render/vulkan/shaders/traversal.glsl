@@ -53,7 +53,7 @@ void testMicro(MicroVertex v0, MicroVertex v1, MicroVertex v2) {
   float t;
   vec3 b;
   float hi = g_found ? (g_hitT < g_tmax ? g_hitT : g_tmax) : g_tmax;  // std::min(tmax, t)
-  if (intersectMicro(v0.p, v1.p, v2.p, g_tmin, hi, t, b) && (!g_found || t < g_hitT)) {
+  if (intersectMicro(g_wr, v0.p, v1.p, v2.p, g_tmin, hi, t, b) && (!g_found || t < g_hitT)) {
     g_hitT = t;
     g_found = true;
     g_hv0 = v0;
@@ -1090,7 +1090,7 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
     g_boxHi = TRI.boxHi + dvec3(g_boxPad);
   }
   g_dvd = dvec2(1.0);
-  makeWatertightRay(o, d);
+  g_wr = makeWatertightRay(o, d);
   g_found = false;
   g_hitT = kInfF;
   g_boxes = 0;
