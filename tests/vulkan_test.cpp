@@ -1,4 +1,4 @@
-// The Vulkan ray tracing path (render/vulkan/, issue 7) against the CPU path, on
+// The Vulkan ray tracing path (render/vulkan/, docs/vulkan.md) against the CPU path, on
 // lavapipe in CI. The contract of the mirror: on one-triangle scenes over every
 // scenario and ray family of the traversal tests, the GPU runs the CPU's traversal step
 // for step (same hit/miss, bit-identical t, the same per-ray work counters). On whole
