@@ -6,7 +6,7 @@
 // and t within 1e-4 relative on all of them (every disagreement is printed with the
 // CPU's and the GPU's answers; the work differs there with the order of the prisms), and
 // the asteroid rendered on Vulkan must match the CPU render. Sized for lavapipe on a
-// 2-core machine (docs/vulkan.md has the timings and the measured parity).
+// 2-core machine (docs/vulkan.md; the timings and measured runs in docs/journal/vulkan.md).
 #include "core/lod.h"
 #include "core/scene.h"
 #include "core/stats.h"
