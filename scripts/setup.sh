@@ -16,7 +16,7 @@ PKGS=(
   clang libclang-rt-14-dev
 )
 
-# Vulkan ray tracing path (render/vulkan/, issue 7): headers, loader, glslc and
+# Vulkan ray tracing path (render/vulkan/, docs/vulkan.md): headers, loader, glslc and
 # spirv-val from bookworm; Mesa's lavapipe (CPU Vulkan with VK_KHR_ray_tracing_pipeline,
 # Mesa >= 24.1) only from bookworm-backports, so the suite is added and the driver is
 # pinned to it below.

@@ -11,7 +11,8 @@
 // three interfaces: query / rawRange (here), invert (Inverter) and split (Splitter) are
 // the virtual entry points every caller uses; the ...Fast forms are the strategies'
 // inline, non-virtual implementations, which a static traversal instantiation calls
-// directly (traversal/README.md: opt-in, kept only where a benchmark shows a gain).
+// directly (docs/traversal.md, "Generic path": opt-in, kept only where a benchmark shows
+// a gain).
 //
 // A strategy registers itself in its .cpp (core/registry.h):
 //     OBLONG_REGISTER_RANGE_QUERY("name", factory, StrategyTraits{...});

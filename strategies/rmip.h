@@ -3,7 +3,7 @@
 // corner; a range of extent (w,h) is the union of the blocks with (p,q) = floor(log2(w,h))
 // at its four corners: four lookups.
 //
-// Two layouts (docs/range_query.md has the measurements behind the default):
+// Two layouts (docs/range_query.md; experiments/range_query/README.md measures them):
 //   "pairs"   (default) layers p, q >= 1 only; entry (i,j) of layer (p,q) holds the
 //             min/max over the pixels [i 2^p, i 2^p + 2^(p+1) - 2] x [j 2^q, ...]: the
 //             union of every 2^p x 2^q block whose corner falls in [i 2^p, (i+1) 2^p)

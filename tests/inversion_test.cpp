@@ -1,4 +1,4 @@
-// Inverters (issue 3, docs/design.md invariant 3): newton and cubic against the ceres reference
+// Inverters (docs/inversion.md, docs/design.md invariant 3): newton and cubic against the ceres reference
 // on the asteroid and synthetic triangles, round trips, "inside the prism ⇒ inside T",
 // and the stiff-case catalogue (tests/fixtures/stiff_cases.h) with the thresholds of
 // docs/inversion.md.
@@ -26,7 +26,7 @@ std::unique_ptr<Inverter> make(const std::string& name, json j = json::object())
   return createInverter(name, ps);
 }
 
-// Agreement with the reference (docs/inversion.md): double 1e-6 relative (the issue).
+// Agreement with the reference (docs/inversion.md): double 1e-6 relative.
 // Float API: the error is ~6e-8 (X and the arithmetic rounded to float) times the
 // conditioning of F. On the asteroid (smooth normals) the measured maximum is 6.4e-7:
 // asserted 1e-5, inside T within 1e-5. On the twisted synthetic triangles det J can drop

@@ -1,4 +1,4 @@
-// The Vulkan ray tracing path (render/vulkan/, issue 7) against the CPU path, on
+// The Vulkan ray tracing path (render/vulkan/, docs/vulkan.md) against the CPU path, on
 // lavapipe in CI. The contract of the mirror: on one-triangle scenes over every
 // scenario and ray family of the traversal tests, the GPU runs the CPU's traversal step
 // for step (same hit/miss, bit-identical t, the same per-ray work counters). On whole
@@ -6,7 +6,7 @@
 // and t within 1e-4 relative on all of them (every disagreement is printed with the
 // CPU's and the GPU's answers; the work differs there with the order of the prisms), and
 // the asteroid rendered on Vulkan must match the CPU render. Sized for lavapipe on a
-// 2-core machine (docs/vulkan.md has the timings and the measured parity).
+// 2-core machine (docs/vulkan.md; the timings and measured runs in docs/journal/vulkan.md).
 #include "core/lod.h"
 #include "core/scene.h"
 #include "core/stats.h"

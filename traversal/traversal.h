@@ -101,7 +101,7 @@ class Traversal final : public TraversalIntersectorBase {
   }
 };
 
-// The generic path: Traversal<RangeQuery, Inverter, Splitter> (traversal.cpp).
+// The generic path: Traversal<RangeQuery, Inverter, Splitter> (create.cpp).
 std::unique_ptr<Intersector> makeGenericTraversal(TraversalParts&& p);
 
 // The steps of createIntersector (create.cpp), shared with the per-ray level of detail

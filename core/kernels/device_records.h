@@ -3,7 +3,8 @@
 // definition, so the two sides cannot drift. Buffers use the scalar block layout
 // (VK_EXT_scalar_block_layout, core in Vulkan 1.2): C++ and GLSL then place members
 // identically as long as every struct is ordered doubles first, then 4-byte members,
-// and its size is a multiple of 8 (checked by static_asserts in vulkan_scene.cpp).
+// and its size is a multiple of 8 (checked by static_asserts in
+// render/vulkan/records.cpp and render/vulkan/runner.cpp).
 #ifndef OBLONG_VULKAN_SHARED_H
 #define OBLONG_VULKAN_SHARED_H
 

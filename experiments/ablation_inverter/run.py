@@ -13,7 +13,7 @@ import common as C  # noqa: E402
 
 NAME = "ablation_inverter"
 TITLE = "Ablation: inverter (one component swapped from the canonical configuration)"
-HYPOTHESIS = ("RMIP paper §4.2 and issue 3: the inverter only changes the cost of each inversion, never the result; Newton is the cheapest exact choice, the cubic solve costs somewhat more, Ceres (the reference) much more.")
+HYPOTHESIS = ("RMIP paper §4.2 and docs/inversion.md: the inverter only changes the cost of each inversion, never the result; Newton is the cheapest exact choice, the cubic solve costs somewhat more, Ceres (the reference) much more.")
 
 
 def run(ctx):

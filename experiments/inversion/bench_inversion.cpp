@@ -1,4 +1,4 @@
-// Error against run time of the inverters (issue 3), and the stiff-case report.
+// Error against run time of the inverters (docs/inversion.md), and the stiff-case report.
 //
 //   bench_inversion --stiff-report        markdown table: per stiff case and inverter,
 //                                         convergence, iterations, errors, failures

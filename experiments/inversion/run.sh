@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Error against run time of the inverters (issue 3). Builds bench_inversion in a timing
+# Error against run time of the inverters (docs/inversion.md). Builds bench_inversion in a timing
 # build (statistics counters compiled out), then writes into this directory:
 #   stiff_report.md  the stiff-case table (also recorded in docs/inversion.md)
 #   errors.csv       accuracy of every variant on every dataset (against ceres)

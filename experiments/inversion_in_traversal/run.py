@@ -2,8 +2,8 @@
 """Fig. 12 of the RMIP paper (CPU panel): render time with point-wise inversion during
 the traversal (Alg. 1 line 15) against without it, per scene and RMIP resolution.
 
-(The folder is not called `inversion`: experiments/inversion is issue 3's inverter
-experiment.)
+(The folder is not called `inversion`: experiments/inversion is the inverters'
+error-against-time experiment.)
 
     /usr/bin/python3 experiments/inversion_in_traversal/run.py [--quick] [--build DIR] [--out DIR] [--reps N]
 """

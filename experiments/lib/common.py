@@ -1,4 +1,4 @@
-"""Shared machinery of the RMIP-paper experiments (issue 6): runs the `oblong` binary
+"""Shared machinery of the RMIP-paper experiments (experiments/README.md): runs the `oblong` binary
 (`render` / `trace` with `--stats`), repeats and interleaves the runs, records the
 machine, the build and every resolved configuration, writes CSVs, plots and the
 summary that `experiments/run_all` turns into experiments/REPORT.md.

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The stiff and extreme catalogue through whole traversals: every case of the inversion
-issue's catalogue (tests/fixtures/stiff_cases.cpp, rebuilt here in float32 with the same
+catalogue (tests/fixtures/stiff_cases.cpp, rebuilt here in float32 with the same
 construction) and the stiff scenarios of tests/traversal_test.cpp, written as scenes
 (OBJ mesh + 16-bit height map + scene JSON), traced by `oblong trace` with every exact
 configuration and compared ray by ray with the brute-force oracle.
@@ -29,7 +29,7 @@ import rays as R  # noqa: E402
 
 NAME = "stability"
 TITLE = "Stability: the stiff catalogue through whole traversals, mismatches against the oracle"
-HYPOTHESIS = ("Issues 3–4 and docs/design.md invariant 1: every exact configuration returns the brute-force oracle's first "
+HYPOTHESIS = ("docs/design.md invariants 1 and 3: every exact configuration returns the brute-force oracle's first "
               "hit on every ray, also on stiff geometry (slivers, near-tangent, diverging and converging normals, "
               "100× displacement, far from the origin, high tiling, rotated and mirrored uvs).")
 

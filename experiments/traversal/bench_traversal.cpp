@@ -1,4 +1,4 @@
-// Traversal targets (issue 4): primary rays on a scene, single thread, for the
+// Traversal speed (experiments/traversal/README.md): primary rays on a scene, single thread, for the
 // canonical configuration (rmip + newton + midpoint2d), TFDM (the `tfdm` baseline,
 // docs/tfdm.md), the RMIP driver with TFDM's mipmap and quad-tree splits (minmax_mipmap +
 // quadtree, no inversion, marching scale 1: an ablation) and the pre-tessellated Embree

@@ -1,4 +1,4 @@
-// The Vulkan ray tracing path (issue 7; docs/design.md §4 "Run the canonical configuration on
+// The Vulkan ray tracing path (docs/vulkan.md; docs/design.md §4 "Run the canonical configuration on
 // Vulkan ray tracing"): the scene's upload records (records.h, built by the CPU's own
 // code) on the device runner (runner.h): one AABB per bounding prism (the CPU's
 // Intersector::bounds), triangles for undisplaced meshes, and the traversal in an
