@@ -16,13 +16,6 @@ double det3(const dvec3& a, const dvec3& b, const dvec3& c) { return glm::dot(a,
 
 double maxAbs(const dvec3& v) { return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}); }
 
-bool lexLess(const dvec3& p, const dvec3& n, const dvec3& q, const dvec3& m) {
-  for (int k = 0; k < 3; ++k)
-    if (p[k] != q[k]) return p[k] < q[k];
-  for (int k = 0; k < 3; ++k)
-    if (n[k] != m[k]) return n[k] < m[k];
-  return false;
-}
 
 // Lower bound on |det J(b, s)|, J = [e1 + s f1, e2 + s f2, N(b)], over b in T_delta and
 // s in [s0, s1], and the cofactor bounds of J⁻¹'s rows. False when det J may vanish.
@@ -209,94 +202,24 @@ Prism Prism::exact(const DisplacedTriangle& T, double a, double b) {
   Prism p;
   const dvec2 bv[3] = {{0, 0}, {1, 0}, {0, 1}};
   for (int k = 0; k < 3; ++k) {
-    p.q_[k] = dvec3(T.p[k]);
-    p.n_[k] = dvec3(T.n[k]);
-    p.bv_[k] = bv[k];
+    p.p_.q[k] = dvec3(T.p[k]);
+    p.p_.n[k] = dvec3(T.n[k]);
+    p.p_.bv[k] = bv[k];
   }
-  p.a_ = a, p.b_ = b;
+  p.p_.a = a, p.p_.b = b;
   return p;
 }
 
 Prism Prism::inflated(const LocalFrame& F, double a, double b, double delta) {
   Prism p;
-  const dvec2 bv[3] = {{-delta, -delta}, {1 + 2 * delta, -delta}, {-delta, 1 + 2 * delta}};
-  for (int k = 0; k < 3; ++k) {
-    p.q_[k] = F.P(bv[k]);
-    p.n_[k] = F.N(bv[k]);
-    p.bv_[k] = bv[k];
-  }
-  p.a_ = a, p.b_ = b;
+  p.p_ = shared::prismInflated(F, a, b, delta);
   return p;
 }
 
 BoxD Prism::bounds() const {
-  // G(b, s) is a convex combination of the six vertices (affine in b at fixed s, affine
-  // in s at fixed b), so their box contains the prism.
   BoxD box;
-  for (int k = 0; k < 3; ++k) {
-    box.extend(vertex(k, false));
-    box.extend(vertex(k, true));
-  }
+  shared::prismBox(p_, box.lo, box.hi);
   return box;
-}
-
-int Prism::crossings(const dvec3& O, const dvec3& D, Crossing& first, Crossing& last) const {
-  int count = 0;
-  auto add = [&](double t, const dvec2& bary, double s) {
-    if (!std::isfinite(t)) return;
-    const Crossing c{t, bary, s};
-    if (count == 0 || t < first.t) first = c;
-    if (count == 0 || t > last.t) last = c;
-    ++count;
-  };
-  constexpr double tol = 1e-9;
-  const double sTol = tol * (std::abs(a_) + std::abs(b_) + 1e-3);
-  // Caps: flat triangles q_k + s n_k (Möller–Trumbore in double).
-  for (int cap = 0; cap < 2; ++cap) {
-    const double s = cap ? b_ : a_;
-    const dvec3 v0 = q_[0] + s * n_[0], v1 = q_[1] + s * n_[1], v2 = q_[2] + s * n_[2];
-    const dvec3 e1 = v1 - v0, e2 = v2 - v0;
-    const dvec3 pv = glm::cross(D, e2);
-    const double det = glm::dot(e1, pv);
-    if (det == 0.0) continue;
-    const double inv = 1.0 / det;
-    const dvec3 tv = O - v0;
-    const double b1 = glm::dot(tv, pv) * inv;
-    const dvec3 qv = glm::cross(tv, e1);
-    const double b2 = glm::dot(D, qv) * inv;
-    if (b1 < -tol || b2 < -tol || b1 + b2 > 1 + tol) continue;
-    const double t = glm::dot(e2, qv) * inv;
-    add(t, bv_[0] + b1 * (bv_[1] - bv_[0]) + b2 * (bv_[2] - bv_[0]), s);
-  }
-  // Walls: the ruled surfaces between the edge's displacement lines. The line at τ meets
-  // the ray where det(O − Pτ, Nτ, D) = 0, a quadratic in τ. Canonical endpoint order.
-  for (int e = 0; e < 3; ++e) {
-    int A = e, B = (e + 1) % 3;
-    if (lexLess(q_[B], n_[B], q_[A], n_[A])) std::swap(A, B);
-    const dvec3 c = O - q_[A], ed = q_[B] - q_[A], g = n_[B] - n_[A];
-    const double k0 = det3(c, n_[A], D);
-    const double k1 = det3(c, g, D) - det3(ed, n_[A], D);
-    const double k2 = -det3(ed, g, D);
-    double tau[2], pad[2];
-    const int nr = quadraticRoots(k2, k1, k0, tau, pad);
-    for (int r = 0; r < nr; ++r) {
-      const double ta = tau[r];
-      if (ta < -tol - pad[r] || ta > 1 + tol + pad[r]) continue;
-      const double tc = std::clamp(ta, 0.0, 1.0);
-      const dvec3 Pt = q_[A] + tc * ed, Nt = n_[A] + tc * g;
-      // Closest points of the ray and the displacement line at τ.
-      const dvec3 Av = Pt - O;
-      const double dd = glm::dot(D, D), nn = glm::dot(Nt, Nt), dn = glm::dot(D, Nt);
-      const double den = dd * nn - dn * dn;
-      if (!(den > 1e-24 * dd * nn)) continue;  // ray along the line: lies in the wall
-      const double da = glm::dot(D, Av), na = glm::dot(Nt, Av);
-      const double t = (nn * da - dn * na) / den;
-      const double s = (dn * da - dd * na) / den;
-      if (s < a_ - sTol || s > b_ + sTol) continue;
-      add(t, bv_[A] + tc * (bv_[B] - bv_[A]), s);
-    }
-  }
-  return count;
 }
 
 }  // namespace oblong

@@ -33,6 +33,7 @@
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/triangle.h"
+#include "core/kernels/prism.h"
 #include "core/kernels/rect_bounds.h"
 #include "traversal/psi.h"
 
@@ -88,30 +89,24 @@ PrismParams analyzeShell(const DisplacedTriangle& T, const Displacement& d, cons
 // A prism G(T' × [a, b]) of a triangle T' given in T's barycentrics (T itself, or T_δ).
 class Prism {
  public:
-  struct Crossing {
-    double t = 0;
-    dvec2 bary{0.0};  // T's barycentrics (u, v) of the crossing point
-    double s = 0;     // its prism coordinate
-  };
+  using Crossing = shared::Crossing;  // t, T's barycentrics (u, v), prism coordinate s
 
   // The exact prism (shared walls) and the traversal's inflated one.
   static Prism exact(const DisplacedTriangle& T, double a, double b);
   static Prism inflated(const LocalFrame& F, double a, double b, double delta);
 
-  const dvec3& base(int k) const { return q_[k]; }
-  const dvec3& dir(int k) const { return n_[k]; }
-  dvec3 vertex(int k, bool top) const { return q_[k] + (top ? b_ : a_) * n_[k]; }
+  const dvec3& base(int k) const { return p_.q[k]; }
+  const dvec3& dir(int k) const { return p_.n[k]; }
+  dvec3 vertex(int k, bool top) const { return p_.q[k] + (top ? p_.b : p_.a) * p_.n[k]; }
   BoxD bounds() const;
 
-  // Every crossing of the line O + tD with the prism's boundary (2 caps, 3 walls), with
-  // a relative tolerance so that grazing and edge crossings are kept. Returns how many
-  // were found and the first and last (the prism's hull along the ray line).
-  int crossings(const dvec3& O, const dvec3& D, Crossing& first, Crossing& last) const;
+  // Every crossing of the line O + tD with the prism's boundary (core/kernels/prism.h).
+  int crossings(const dvec3& O, const dvec3& D, Crossing& first, Crossing& last) const {
+    return shared::prismCrossings(p_, O, D, first, last);
+  }
 
  private:
-  dvec3 q_[3], n_[3];  // base points and displacement directions of the three vertices
-  dvec2 bv_[3];        // T's barycentrics of the three vertices
-  double a_ = 0, b_ = 0;
+  shared::PrismShape p_{};
 };
 
 }  // namespace oblong

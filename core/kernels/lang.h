@@ -9,6 +9,7 @@
 //   OBLONG_IN(T)    a read-only argument    (C++ const T&, GLSL in T)
 //   OBLONG_OUT(T)   an out argument         (C++ T&,       GLSL out T)
 //   OBLONG_INOUT(T) an in-out argument      (C++ T&,       GLSL inout T)
+//   OBLONG_IN_ARRAY before an array parameter that is read (C++ const)
 //   OBLONG_OUT_ARRAY before an array parameter that is written (GLSL out; C++ arrays
 //                   are passed by pointer)
 //   OBLONG_FORCE_INLINE on hot C++ paths (GLSL inlines every call anyway)
@@ -42,6 +43,7 @@ inline double max(double a, double b) { return a < b ? b : a; }
 inline int min(int a, int b) { return b < a ? b : a; }
 inline int max(int a, int b) { return a < b ? b : a; }
 inline double abs(double x) { return std::abs(x); }
+inline double clamp(double x, double lo, double hi) { return x < lo ? lo : (hi < x ? hi : x); }
 inline double sqrt(double x) { return std::sqrt(x); }
 using glm::abs;
 using glm::max;
@@ -65,6 +67,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_IN(T) const T&
 #define OBLONG_OUT(T) T&
 #define OBLONG_INOUT(T) T&
+#define OBLONG_IN_ARRAY const
 #define OBLONG_OUT_ARRAY
 #define OBLONG_PRECISE
 
@@ -77,6 +80,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_IN(T) in T
 #define OBLONG_OUT(T) out T
 #define OBLONG_INOUT(T) inout T
+#define OBLONG_IN_ARRAY in
 #define OBLONG_OUT_ARRAY out
 #define OBLONG_PRECISE precise
 

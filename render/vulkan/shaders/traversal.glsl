@@ -26,6 +26,7 @@
 #include "core/kernels/lang.h"
 #include "core/kernels/patch_math.h"
 #include "core/kernels/rect_bounds.h"
+#include "core/kernels/prism.h"
 
 #define kInfF uintBitsToFloat(0x7f800000u)
 
@@ -189,128 +190,9 @@ void testCell(int i, int j) {
   g_microTris += microCell(i + TRI.origin.x, j + TRI.origin.y);
 }
 
-double det3D(dvec3 a, dvec3 b, dvec3 c) { return dotD(a, crossD(b, c)); }
 
-// ---- the inflated prism and its crossings (traversal/prism.cpp Prism) -------------------
-dvec3 g_pq[3], g_pn[3];
-dvec2 g_pbv[3];
-double g_pa, g_pb;
-
-// Prism::inflated(F, a, b, delta)
-void makePrism(double a, double b, double delta) {
-  g_pbv[0] = dvec2(-delta, -delta);
-  g_pbv[1] = dvec2(1.0 + 2.0 * delta, -delta);
-  g_pbv[2] = dvec2(-delta, 1.0 + 2.0 * delta);
-  for (int k = 0; k < 3; ++k) {
-    g_pq[k] = frameP(g_F, g_pbv[k]);
-    g_pn[k] = frameN(g_F, g_pbv[k]);
-  }
-  g_pa = a;
-  g_pb = b;
-}
-// Prism::bounds() padded.
-void prismBounds(double pad, out dvec3 lo, out dvec3 hi) {
-  lo = dvec3(kInfD);
-  hi = dvec3(-kInfD);
-  for (int k = 0; k < 6; ++k) {
-    precise dvec3 v = g_pq[k >> 1] + ((k & 1) != 0 ? g_pb : g_pa) * g_pn[k >> 1];
-    lo = min(lo, v);
-    hi = max(hi, v);
-  }
-  lo -= dvec3(pad);
-  hi += dvec3(pad);
-}
-
-struct Crossing {
-  double t;
-  dvec2 bary;
-  double s;
-};
-
-bool lexLess(dvec3 p, dvec3 n, dvec3 q, dvec3 m) {
-  for (int k = 0; k < 3; ++k)
-    if (p[k] != q[k]) return p[k] < q[k];
-  for (int k = 0; k < 3; ++k)
-    if (n[k] != m[k]) return n[k] < m[k];
-  return false;
-}
-
-// Prism::crossings: caps (Möller–Trumbore) and walls (quadratic in the edge parameter).
-int prismCrossings(out Crossing first, out Crossing last) {
-  first = Crossing(0.0, dvec2(0.0), 0.0);
-  last = first;
-  int count = 0;
-  double tol = 1e-9;
-  double sTol = tol * (abs(g_pa) + abs(g_pb) + 1e-3);
-  for (int f = 0; f < 5; ++f) {
-    double t = 0.0, s = 0.0;
-    dvec2 bary = dvec2(0.0);
-    bool ok = false;
-    if (f < 2) {
-      s = f == 1 ? g_pb : g_pa;
-      precise dvec3 v0 = g_pq[0] + s * g_pn[0], v1 = g_pq[1] + s * g_pn[1], v2 = g_pq[2] + s * g_pn[2];
-      precise dvec3 e1 = v1 - v0, e2 = v2 - v0;
-      dvec3 pv = crossD(g_D, e2);
-      double det = dotD(e1, pv);
-      if (det != 0.0) {
-        precise double inv = 1.0 / det;
-        precise dvec3 tv = g_O - v0;
-        precise double b1 = dotD(tv, pv) * inv;
-        dvec3 qv = crossD(tv, e1);
-        precise double b2 = dotD(g_D, qv) * inv;
-        if (!(b1 < -tol || b2 < -tol || b1 + b2 > 1.0 + tol)) {
-          precise double tt = dotD(e2, qv) * inv;
-          precise dvec2 bb = g_pbv[0] + b1 * (g_pbv[1] - g_pbv[0]) + b2 * (g_pbv[2] - g_pbv[0]);
-          t = tt;
-          bary = bb;
-          ok = true;
-          if (finiteD(t)) {
-            Crossing c = Crossing(t, bary, s);
-            if (count == 0 || t < first.t) first = c;
-            if (count == 0 || t > last.t) last = c;
-            ++count;
-          }
-        }
-      }
-      continue;
-    }
-    int e = f - 2;
-    int A = e, B = (e + 1) % 3;
-    if (lexLess(g_pq[B], g_pn[B], g_pq[A], g_pn[A])) {
-      int x = A;
-      A = B;
-      B = x;
-    }
-    precise dvec3 c = g_O - g_pq[A], ed = g_pq[B] - g_pq[A], g = g_pn[B] - g_pn[A];
-    precise double k0 = det3D(c, g_pn[A], g_D);
-    precise double k1 = det3D(c, g, g_D) - det3D(ed, g_pn[A], g_D);
-    precise double k2 = -det3D(ed, g, g_D);
-    double tau[2], pad[2];
-    int nr = quadraticRoots(k2, k1, k0, tau, pad);
-    for (int r = 0; r < nr; ++r) {
-      double ta = tau[r];
-      if (ta < -tol - pad[r] || ta > 1.0 + tol + pad[r]) continue;
-      double tc = clamp(ta, 0.0, 1.0);
-      precise dvec3 Pt = g_pq[A] + tc * ed, Nt = g_pn[A] + tc * g;
-      precise dvec3 Av = Pt - g_O;
-      precise double dd = dotD(g_D, g_D), nn = dotD(Nt, Nt), dn = dotD(g_D, Nt);
-      precise double den = dd * nn - dn * dn;
-      if (!(den > 1e-24 * dd * nn)) continue;
-      precise double da = dotD(g_D, Av), na = dotD(Nt, Av);
-      precise double tt = (nn * da - dn * na) / den;
-      precise double ss = (dn * da - dd * na) / den;
-      if (ss < g_pa - sTol || ss > g_pb + sTol) continue;
-      precise dvec2 bb = g_pbv[A] + tc * (g_pbv[B] - g_pbv[A]);
-      if (finiteD(tt)) {
-        Crossing cr = Crossing(tt, bb, ss);
-        if (count == 0 || tt < first.t) first = cr;
-        if (count == 0 || tt > last.t) last = cr;
-        ++count;
-      }
-    }
-  }
-  return count;
-}
+// ---- the inflated prism: the CPU's own code (core/kernels/prism.h) ----------------------
+PrismShape g_P;
 
 // ---- curve points (RayPatch::makePoint, invertAt) ------------------------------------
 struct CurvePoint {
@@ -955,14 +837,17 @@ int setupCurve() {
   precise double rayErr = OBLONG_TRAV_RAY_ERR * (TRI.maxP + (pre ? TRI.budget : maxO) + abs(TRI.a) + abs(TRI.b));
   precise double extraB = (TRI.kb.x + TRI.kb.y) * double(OBLONG_TRAV_RAY_ERR_FACTOR) * rayErr,
                  extraS = TRI.ks * double(OBLONG_TRAV_RAY_ERR_FACTOR) * rayErr;
-  makePrism(TRI.a - TRI.inflateS - extraS, TRI.b + TRI.inflateS + extraS, TRI.inflateB + extraB);
+  g_P = prismInflated(g_F, TRI.a - TRI.inflateS - extraS, TRI.b + TRI.inflateS + extraS, TRI.inflateB + extraB);
   dvec3 plo, phi;
-  prismBounds(pre ? TRI.vertexErr + rayErr : g_boxPad, plo, phi);
+  prismBox(g_P, plo, phi);  // Prism::bounds(), padded
+  precise double ppad = pre ? TRI.vertexErr + rayErr : g_boxPad;
+  plo -= dvec3(ppad);
+  phi += dvec3(ppad);
   double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = double(g_tmax) + slack(double(g_tmax));
   clipBox(plo, phi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return 0;
   Crossing first, last;
-  int nc = prismCrossings(first, last);
+  int nc = prismCrossings(g_P, g_O, g_D, first, last);
   if (nc == 0) return 0;  // the line misses the inflated prism
   if (nc < 2) return 1;   // grazed
   double tIn = max(first.t, double(g_tmin) - slack(double(g_tmin)));

@@ -1,0 +1,147 @@
+// The traversal's inflated prism and the ray's crossings of its boundary (traversal/prism.h
+// says how it is built and why it holds the micro-geometry), written once for the CPU and
+// the Vulkan shaders in the subset of core/kernels/lang.h.
+#ifndef OBLONG_KERNELS_PRISM_H
+#define OBLONG_KERNELS_PRISM_H
+
+#include "core/kernels/lang.h"
+#include "core/kernels/patch_math.h"
+
+OBLONG_KERNELS_BEGIN
+
+// A prism G(T' × [a, b]) of a triangle T' given in T's barycentrics.
+struct PrismShape {
+  dvec3 q[3];   // base points of the three vertices
+  dvec3 n[3];   // their displacement directions
+  dvec2 bv[3];  // T's barycentrics of the three vertices
+  double a, b;  // prism coordinates of the caps
+};
+
+struct Crossing {
+  double t;
+  dvec2 bary;  // T's barycentrics (u, v) of the crossing point
+  double s;    // its prism coordinate
+};
+
+// T_δ (T grown by δ in barycentric units) with caps at a and b.
+OBLONG_INLINE PrismShape prismInflated(OBLONG_IN(PatchFrame) F, double a, double b, double delta) {
+  PrismShape P;
+  P.bv[0] = dvec2(-delta, -delta);
+  P.bv[1] = dvec2(1.0 + 2.0 * delta, -delta);
+  P.bv[2] = dvec2(-delta, 1.0 + 2.0 * delta);
+  for (int k = 0; k < 3; ++k) {
+    P.q[k] = frameP(F, P.bv[k]);
+    P.n[k] = frameN(F, P.bv[k]);
+  }
+  P.a = a;
+  P.b = b;
+  return P;
+}
+
+// The box of the six vertices: G(b, s) is a convex combination of them (affine in b at
+// fixed s, affine in s at fixed b), so it contains the prism.
+OBLONG_INLINE void prismBox(OBLONG_IN(PrismShape) P, OBLONG_OUT(dvec3) lo, OBLONG_OUT(dvec3) hi) {
+  lo = dvec3(kInfD);
+  hi = dvec3(-kInfD);
+  for (int k = 0; k < 6; ++k) {
+    OBLONG_PRECISE dvec3 v = P.q[k >> 1] + ((k & 1) != 0 ? P.b : P.a) * P.n[k >> 1];
+    lo = min(lo, v);
+    hi = max(hi, v);
+  }
+}
+
+// Lexicographic order of (point, direction): the canonical endpoint order of an edge, so
+// that the two prisms sharing a wall compute it from the same end.
+OBLONG_INLINE bool lexLess(OBLONG_IN(dvec3) p, OBLONG_IN(dvec3) n, OBLONG_IN(dvec3) q, OBLONG_IN(dvec3) m) {
+  for (int k = 0; k < 3; ++k)
+    if (p[k] != q[k]) return p[k] < q[k];
+  for (int k = 0; k < 3; ++k)
+    if (n[k] != m[k]) return n[k] < m[k];
+  return false;
+}
+
+OBLONG_INLINE double det3D(OBLONG_IN(dvec3) a, OBLONG_IN(dvec3) b, OBLONG_IN(dvec3) c) { return dotD(a, crossD(b, c)); }
+
+// Every crossing of the line O + tD with the prism's boundary (2 caps, 3 walls), with a
+// relative tolerance so that grazing and edge crossings are kept. Returns how many were
+// found, and the first and last (the prism's hull along the ray line).
+OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
+                                 OBLONG_OUT(Crossing) first, OBLONG_OUT(Crossing) last) {
+  first.t = 0.0;
+  first.bary = dvec2(0.0);
+  first.s = 0.0;
+  last = first;
+  int count = 0;
+  double tol = 1e-9;
+  OBLONG_PRECISE double sTol = tol * (abs(P.a) + abs(P.b) + 1e-3);
+  // Caps: flat triangles q_k + s n_k (Möller–Trumbore in double).
+  for (int cap = 0; cap < 2; ++cap) {
+    double s = cap == 1 ? P.b : P.a;
+    OBLONG_PRECISE dvec3 v0 = P.q[0] + s * P.n[0], v1 = P.q[1] + s * P.n[1], v2 = P.q[2] + s * P.n[2];
+    OBLONG_PRECISE dvec3 e1 = v1 - v0, e2 = v2 - v0;
+    dvec3 pv = crossD(D, e2);
+    double det = dotD(e1, pv);
+    if (det == 0.0) continue;
+    OBLONG_PRECISE double inv = 1.0 / det;
+    OBLONG_PRECISE dvec3 tv = O - v0;
+    OBLONG_PRECISE double b1 = dotD(tv, pv) * inv;
+    dvec3 qv = crossD(tv, e1);
+    OBLONG_PRECISE double b2 = dotD(D, qv) * inv;
+    if (b1 < -tol || b2 < -tol || b1 + b2 > 1.0 + tol) continue;
+    OBLONG_PRECISE double t = dotD(e2, qv) * inv;
+    if (!finiteD(t)) continue;
+    OBLONG_PRECISE dvec2 bb = P.bv[0] + b1 * (P.bv[1] - P.bv[0]) + b2 * (P.bv[2] - P.bv[0]);
+    Crossing c;
+    c.t = t;
+    c.bary = bb;
+    c.s = s;
+    if (count == 0 || t < first.t) first = c;
+    if (count == 0 || t > last.t) last = c;
+    ++count;
+  }
+  // Walls: the ruled surfaces between the edge's displacement lines. The line at τ meets
+  // the ray where det(O − Pτ, Nτ, D) = 0, a quadratic in τ. Canonical endpoint order.
+  for (int e = 0; e < 3; ++e) {
+    int A = e, B = (e + 1) % 3;
+    if (lexLess(P.q[B], P.n[B], P.q[A], P.n[A])) {
+      int x = A;
+      A = B;
+      B = x;
+    }
+    OBLONG_PRECISE dvec3 c = O - P.q[A], ed = P.q[B] - P.q[A], g = P.n[B] - P.n[A];
+    OBLONG_PRECISE double k0 = det3D(c, P.n[A], D);
+    OBLONG_PRECISE double k1 = det3D(c, g, D) - det3D(ed, P.n[A], D);
+    OBLONG_PRECISE double k2 = -det3D(ed, g, D);
+    double tau[2], pad[2];
+    int nr = quadraticRoots(k2, k1, k0, tau, pad);
+    for (int r = 0; r < nr; ++r) {
+      double ta = tau[r];
+      if (ta < -tol - pad[r] || ta > 1.0 + tol + pad[r]) continue;
+      double tc = clamp(ta, 0.0, 1.0);
+      OBLONG_PRECISE dvec3 Pt = P.q[A] + tc * ed, Nt = P.n[A] + tc * g;
+      // Closest points of the ray and the displacement line at τ.
+      OBLONG_PRECISE dvec3 Av = Pt - O;
+      OBLONG_PRECISE double dd = dotD(D, D), nn = dotD(Nt, Nt), dn = dotD(D, Nt);
+      OBLONG_PRECISE double den = dd * nn - dn * dn;
+      if (!(den > 1e-24 * dd * nn)) continue;  // ray along the line: lies in the wall
+      OBLONG_PRECISE double da = dotD(D, Av), na = dotD(Nt, Av);
+      OBLONG_PRECISE double t = (nn * da - dn * na) / den;
+      OBLONG_PRECISE double s = (dn * da - dd * na) / den;
+      if (s < P.a - sTol || s > P.b + sTol) continue;
+      if (!finiteD(t)) continue;
+      OBLONG_PRECISE dvec2 bb = P.bv[A] + tc * (P.bv[B] - P.bv[A]);
+      Crossing cr;
+      cr.t = t;
+      cr.bary = bb;
+      cr.s = s;
+      if (count == 0 || t < first.t) first = cr;
+      if (count == 0 || t > last.t) last = cr;
+      ++count;
+    }
+  }
+  return count;
+}
+
+OBLONG_KERNELS_END
+
+#endif
