@@ -29,6 +29,7 @@
 // its .cpp: OBLONG_REGISTER_SPLITTER("name", factory, StrategyTraits{...}).
 #pragma once
 
+#include "core/kernels/curve_point.h"
 #include "core/math.h"
 #include "core/registry.h"
 
@@ -39,11 +40,10 @@
 
 namespace oblong {
 
-// A point of the ray's curve: ray parameter, local sample coordinates, error radius.
-struct CurvePoint {
-  double t = 0;
-  dvec2 uv{0.0};
-  dvec2 pad{0.0};
+// A point of the ray's curve: ray parameter, local sample coordinates, error radius
+// (core/kernels/curve_point.h, shared with the Vulkan shaders), zero when made here.
+struct CurvePoint : shared::CurvePoint {
+  CurvePoint() : shared::CurvePoint{0.0, dvec2(0.0), dvec2(0.0)} {}
 };
 
 // A monotone piece of the curve from a (front) to b (back).

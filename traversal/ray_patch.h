@@ -109,6 +109,7 @@ class RayPatch final : public SplitContext {
            const Ray& ray, const RayConstants& rc, RayCounters& counters)
       : tri_(mesh.tris[prim]),
         shell_(mesh.params[prim]),
+        claim_{shell_.domainB, shell_.domainS0, shell_.domainS1, shell_.kb, shell_.ks, shell_.kxy},
         disp_(mesh.disp),
         rq_(rq),
         inv_(inv),
@@ -265,26 +266,9 @@ class RayPatch final : public SplitContext {
   }
 
   // A curve point from prism coordinates (b, s) claimed to be the projection of the ray
-  // point at t. The residual r = G(b, s) − X(t) bounds the error: G is bilinear in
-  // (b, s), so J(b, s_true)·(Δb, Δs) = −r exactly and |Δu| ≤ kb.x |r|, |Δv| ≤ kb.y |r|
-  // while both points stay in the analysed domain.
+  // point at t (core/kernels/curve_point.h: the residual bounds its error).
   bool makePoint(double t, const dvec2& b, double s, CurvePoint& out) const {
-    const double dom = shell_.domainB;
-    if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1 + dom)) return false;
-    if (!(s >= shell_.domainS0 && s <= shell_.domainS1)) return false;
-    const dvec3 X = origin_ + t * dir_;
-    const dvec3 G = frame_.G(b, s);
-    const double mag = std::max({std::abs(X.x), std::abs(X.y), std::abs(X.z), std::abs(G.x), std::abs(G.y),
-                                 std::abs(G.z)});
-    const double r = glm::length(G - X) + OBLONG_TRAV_RESIDUAL_ROUND * mag;
-    const dvec2 db = shell_.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
-    if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
-        !(shell_.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (shell_.domainS1 - shell_.domainS0) + OBLONG_TRAV_TINY))
-      return false;
-    out.t = t;
-    out.uv = frame_.local(b);
-    out.pad = shell_.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(out.uv));
-    return std::isfinite(out.uv.x) && std::isfinite(out.uv.y);
+    return shared::makePoint(frame_, claim_, origin_, dir_, t, b, s, out);
   }
 
   bool invertAt(double t, CurvePoint& out) {
@@ -316,10 +300,7 @@ class RayPatch final : public SplitContext {
     const dvec2 uv = double(h.b0) * dvec2(m.v[0].uv) + double(h.b1) * dvec2(m.v[1].uv) +
                      double(h.b2) * dvec2(m.v[2].uv);
     const dvec2 b = frame_.bary(disp_.toSample(uv) - dvec2(frame_.origin));
-    const dvec3 X = origin_ + t * dir_;
-    const dvec3 N = frame_.N(b);
-    const double s = glm::dot(X - frame_.P(b), N) / glm::dot(N, N);
-    return makePoint(t, b, s, out);
+    return makePoint(t, b, shared::heightOnLine(frame_, origin_ + t * dir_, b), out);
   }
 
   // The curve point at t, between curve points a and b, without an inversion: uv
@@ -327,19 +308,9 @@ class RayPatch final : public SplitContext {
   // squares, one Newton step on G(b, s) = X(t) in double; makePoint's residual bound
   // holds for any claimed (b, s). Refused when its pad exceeds OBLONG_TRAV_CLAIM_PAD.
   bool pointBetween(const CurvePoint& a, const CurvePoint& b, double t, CurvePoint& out) const {
-    const double tau = (t - a.t) / (b.t - a.t);
-    dvec2 bc = frame_.bary(a.uv + tau * (b.uv - a.uv));
-    const dvec3 X = origin_ + t * dir_;
-    const dvec3 N = frame_.N(bc);
-    double s = glm::dot(X - frame_.P(bc), N) / glm::dot(N, N);
-    // J = [∂G/∂u, ∂G/∂v, N] (G is bilinear in (b, s)), solved by Cramer's rule.
-    const dvec3 r = X - frame_.G(bc, s);
-    const dvec3 Gu = frame_.e1 + s * frame_.f1, Gv = frame_.e2 + s * frame_.f2;
-    const dvec3 c0 = glm::cross(Gv, N), c1 = glm::cross(N, Gu), c2 = glm::cross(Gu, Gv);
-    const double det = glm::dot(Gu, c0);
-    if (!(std::abs(det) > 0)) return false;
-    bc += dvec2(glm::dot(r, c0), glm::dot(r, c1)) / det;
-    s += glm::dot(r, c2) / det;
+    dvec2 bc;
+    double s;
+    if (!shared::claimBetween(frame_, origin_, dir_, a, b, t, bc, s)) return false;
     return makePoint(t, bc, s, out) && out.pad.x + out.pad.y <= OBLONG_TRAV_CLAIM_PAD;
   }
 
@@ -600,6 +571,7 @@ class RayPatch final : public SplitContext {
   // The triangle and what was precomputed for it (TraversalMesh).
   const DisplacedTriangle& tri_;
   const PrismParams& shell_;  // shell analysis: heights [a, b], bulge, ε, error bounds
+  const shared::ClaimBounds claim_;  // its bounds on the claims' errors (makePoint)
   const Displacement& disp_;
   const RQ& rq_;
   const Inv& inv_;

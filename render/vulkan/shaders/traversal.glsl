@@ -27,12 +27,14 @@
 #include "core/kernels/patch_math.h"
 #include "core/kernels/rect_bounds.h"
 #include "core/kernels/prism.h"
+#include "core/kernels/curve_point.h"
 
 #define kInfF uintBitsToFloat(0x7f800000u)
 
 // ---- per invocation state (RayPatch's members; g_tri, g_mesh in prism.rint) ----------
 PatchFrame g_F;  // the triangle's frame (core/kernels/patch_math.h), from TRI in initPatch
 Psi g_psi;
+ClaimBounds g_claim;  // TRI's bounds on the claims' errors (makePoint)
 float g_tmin, g_tmax;             // the ray's [tmin, tmax] (float, as Ray)
 dvec3 g_O, g_D, g_invD;
 dvec3 g_boxLo, g_boxHi;           // prismBox_
@@ -195,33 +197,13 @@ void testCell(int i, int j) {
 PrismShape g_P;
 
 // ---- curve points (RayPatch::makePoint, invertAt) ------------------------------------
-struct CurvePoint {
-  double t;
-  dvec2 uv;
-  dvec2 pad;
-};
 dvec2 pieceLo(CurvePoint a, CurvePoint b) { return min(a.uv - a.pad, b.uv - b.pad); }
 dvec2 pieceHi(CurvePoint a, CurvePoint b) { return max(a.uv + a.pad, b.uv + b.pad); }
 
 dvec2 g_eps;
 
 bool makePoint(double t, dvec2 b, double s, out CurvePoint outp) {
-  outp = CurvePoint(t, dvec2(0.0), dvec2(0.0));
-  double dom = TRI.domainB;
-  if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1.0 + dom)) return false;
-  if (!(s >= TRI.domainS0 && s <= TRI.domainS1)) return false;
-  precise dvec3 X = g_O + t * g_D;
-  precise dvec3 G = frameP(g_F, b) + s * frameN(g_F, b);
-  double mag = max(max(max(abs(X.x), abs(X.y)), max(abs(X.z), abs(G.x))), max(abs(G.y), abs(G.z)));
-  precise double r = lengthD(G - X) + OBLONG_TRAV_RESIDUAL_ROUND * mag;
-  precise dvec2 db = TRI.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
-  if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
-      !(TRI.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (TRI.domainS1 - TRI.domainS0) + OBLONG_TRAV_TINY))
-    return false;
-  outp.uv = frameLocal(g_F, b);
-  precise dvec2 pad = TRI.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + abs(outp.uv));
-  outp.pad = pad;
-  return finiteD(outp.uv.x) && finiteD(outp.uv.y);
+  return makePoint(g_F, g_claim, g_O, g_D, t, b, s, outp);
 }
 
 // ---- the inverter: newton (inversion/newton.h) with its cubic fallback (cubic.h) -----
@@ -554,19 +536,9 @@ void startMarch(CurvePoint a, CurvePoint b) {
 // makePoint; refused when its pad exceeds OBLONG_TRAV_CLAIM_PAD.
 bool pointBetween(CurvePoint a, CurvePoint b, double t, out CurvePoint outp) {
   outp = CurvePoint(t, dvec2(0.0), dvec2(0.0));
-  precise double tau = (t - a.t) / (b.t - a.t);
-  precise dvec2 g = a.uv + tau * (b.uv - a.uv);
-  dvec2 bc = frameBary(g_F, g);
-  precise dvec3 X = g_O + t * g_D;
-  dvec3 N = frameN(g_F, bc);
-  precise double s = dotD(X - frameP(g_F, bc), N) / dotD(N, N);
-  precise dvec3 r = X - (frameP(g_F, bc) + s * frameN(g_F, bc));
-  precise dvec3 Gu = TRI.e1 + s * TRI.f1, Gv = TRI.e2 + s * TRI.f2;
-  dvec3 c0 = crossD(Gv, N), c1 = crossD(N, Gu), c2 = crossD(Gu, Gv);
-  double det = dotD(Gu, c0);
-  if (!(abs(det) > 0.0)) return false;
-  precise dvec2 nb = bc + dvec2(dotD(r, c0), dotD(r, c1)) / det;
-  precise double ns = s + dotD(r, c2) / det;
+  dvec2 nb;
+  double ns;
+  if (!claimBetween(g_F, g_O, g_D, a, b, t, nb, ns)) return false;
   if (!makePoint(t, nb, ns, outp)) return false;
   return outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD;
 }
@@ -581,9 +553,7 @@ bool pointFromHit(double t, out CurvePoint outp) {
   precise dvec2 loc = toSample(uv) - dvec2(TRI.origin);
   dvec2 b = frameBary(g_F, loc);
   precise dvec3 X = g_O + t * g_D;
-  dvec3 N = frameN(g_F, b);
-  precise double s = dotD(X - frameP(g_F, b), N) / dotD(N, N);
-  return makePoint(t, b, s, outp);
+  return makePoint(t, b, heightOnLine(g_F, X, b), outp);
 }
 
 // False when no cell of the marched piece can hold a better hit (RayPatch::march).
@@ -961,6 +931,7 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
   g_F.Nc = TRI.Nc;
   g_F.NX = TRI.NX;
   g_F.NY = TRI.NY;
+  g_claim = ClaimBounds(TRI.domainB, TRI.domainS0, TRI.domainS1, TRI.kb, TRI.ks, TRI.kxy);
   double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
   bool pre = maxO <= TRI.budget;
   // RayMargins::make(P, maxAbsVertex(T), maxO): this ray's own pads.
