@@ -57,6 +57,7 @@ OBLONG_STAT_COUNTER("traversal/PrismGrazes", travGrazes);
 OBLONG_STAT_COUNTER("traversal/IllPosedTriangles", travIllPosed);
 OBLONG_STAT_COUNTER("traversal/RejectedInversions", travBadInversions);
 OBLONG_STAT_COUNTER("traversal/StackOverflows", travOverflows);
+OBLONG_STAT_COUNTER("traversal/MarchStops", travMarchStops);  // marching ended by the closest hit
 
 // The counters of one intersect() call, flushed to RayCounters and the statistics once.
 inline void flushCounters(const RayCounters& local, bool hit, RayCounters& c) {
@@ -458,8 +459,10 @@ class RayPatch final : public SplitContext {
       return stopAxis[a] && (sgn[a] > 0 ? k - dilation_[a] > stop[a] : k + 1 + dilation_[a] < stop[a]);
     };
     for (int k = sa > 0 ? clo[ax] : chi[ax]; sa > 0 ? k <= chi[ax] : k >= clo[ax]; k += sa) {
-      if (!stopSet && hit_.found && !setStop()) return;
-      if (past(ax, k)) return;
+      if ((!stopSet && hit_.found && !setStop()) || past(ax, k)) {
+        OBLONG_STAT_INC(travMarchStops);
+        return;
+      }
       // The piece's points whose major coordinate is within ε of column k.
       const double c0 = std::max(k - dilation_[ax], lo[ax]), c1 = std::min(k + 1 + dilation_[ax], hi[ax]);
       if (c0 > c1) continue;
@@ -476,8 +479,14 @@ class RayPatch final : public SplitContext {
       const double eta = OBLONG_TRAV_SNAP_ETA * (1 + std::abs(wlo) + std::abs(whi));
       const int j0 = std::max(int(std::floor(wlo - eta)), clo[mi]), j1 = std::min(int(std::floor(whi + eta)), chi[mi]);
       for (int j = sm > 0 ? j0 : j1; sm > 0 ? j <= j1 : j >= j0; j += sm) {
-        if (!stopSet && hit_.found && !setStop()) return;
-        if (past(mi, j)) break;
+        if (!stopSet && hit_.found && !setStop()) {
+          OBLONG_STAT_INC(travMarchStops);
+          return;
+        }
+        if (past(mi, j)) {
+          OBLONG_STAT_INC(travMarchStops);
+          break;
+        }
         if (ax == 0) testCell(k, j);
         else testCell(j, k);
       }
