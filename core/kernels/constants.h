@@ -14,10 +14,9 @@
 // own double value (the SPIR-V holds the double 1e-05, not the float 1e-05f), so both
 // sides compute with the same values.
 //
-// Not here yet: the literals of traversal/psi.h (rayParamAt),
-// prism.cpp (Prism::crossings), rect_bounds.h (boxOverRect) and inversion/cubic.h
-// (polyRoots, cubicSolve) are still written on both sides, held only by the parity test
-// (docs/vulkan.md, "The contract").
+// The kernels of this folder keep their own literals (one copy, both languages). Not here
+// yet: the literals of inversion/cubic.h (polyRoots, cubicSolve), still written on both
+// sides, held only by the parity test (docs/vulkan.md, "The contract").
 #ifndef OBLONG_TRAVERSAL_CONSTANTS_H
 #define OBLONG_TRAVERSAL_CONSTANTS_H
 
