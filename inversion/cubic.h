@@ -166,18 +166,31 @@ inline int polyRoots(S a0, S a1, S a2, S a3, S x[3], int& degree) {
   return kept;
 }
 
+// The cubic in s/L of the point W = X − p0 (the header's a0..a3), with the edges and W
+// scaled by 1/L (e1, e2, w) as its roots' barycentrics need them.
+template <typename S>
+struct CubicOf {
+  glm::vec<3, S> e1, e2, w;
+  S a0, a1, a2, a3;
+  CubicOf(const Frame<S>& F, const glm::vec<3, S>& W) {
+    const S iL = S(1) / F.L;
+    e1 = F.e1 * iL, e2 = F.e2 * iL, w = W * iL;
+    a0 = det3(e1, e2, w);
+    a1 = det3(F.f1, e2, w) + det3(e1, F.f2, w) - det3(e1, e2, F.n0);
+    a2 = det3(F.f1, F.f2, w) - det3(F.f1, e2, F.n0) - det3(e1, F.f2, F.n0);
+    a3 = -det3(F.f1, F.f2, F.n0);
+  }
+};
+
 template <typename S>
 inline InversionResultT<S> cubicSolve(const glm::vec<3, S>& X, const DisplacedTriangle& T, int polish,
                                       int* degreeOut = nullptr) {
   using V = glm::vec<3, S>;
   const Frame<S> F(T);
   const V W = X - V(T.p[0]);
-  const S iL = S(1) / F.L;
-  const V e1 = F.e1 * iL, e2 = F.e2 * iL, w = W * iL;
-  const S a0 = det3(e1, e2, w);
-  const S a1 = det3(F.f1, e2, w) + det3(e1, F.f2, w) - det3(e1, e2, F.n0);
-  const S a2 = det3(F.f1, F.f2, w) - det3(F.f1, e2, F.n0) - det3(e1, F.f2, F.n0);
-  const S a3 = -det3(F.f1, F.f2, F.n0);
+  const CubicOf<S> C(F, W);
+  const V &e1 = C.e1, &e2 = C.e2, &w = C.w;
+  const S a0 = C.a0, a1 = C.a1, a2 = C.a2, a3 = C.a3;
   S roots[3];
   int degree;
   const int n = polyRoots(a0, a1, a2, a3, roots, degree);
