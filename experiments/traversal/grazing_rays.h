@@ -39,7 +39,7 @@ inline std::vector<Ray> grazingRays(const Scene& s, int count, uint32_t seed = 7
     const Interval raw = d.map->range();
     const float h0 = d.scale * (raw.lo + d.bias), h1 = d.scale * (raw.hi + d.bias);
     const float h = h0 + U(rng) * (h1 - h0), a = (0.5f + 5.5f * U(rng)) * kDeg;
-    const vec3 q = vec3(dvec3(T.P(u, v) + h * n) + dvec3(sm.mesh.origin));
+    const vec3 q = vec3(dvec3(T.P(u, v) + h * n) + sm.mesh.origin);
     const vec3 dir = std::cos(a) * t - std::sin(a) * n;
     r.push_back(Ray{q - 0.5f * diag * dir, dir, 0.0f, kInfinity});
   }
