@@ -677,6 +677,35 @@ TEST_CASE("a mesh far from the origin gets its own frame: same positions whereve
   CHECK(near0.positions == base.positions);
 }
 
+TEST_CASE("the frame's origin is the box centre in double: the same mesh authored anywhere gets the same positions",
+          "[mesh][translation]") {
+  // The tent at the origin, and written into its file at offsets that keep its
+  // coordinates floats (non-powers of two; the second is far, the third not a float
+  // grid point of the old power-of-two rule).
+  const Mesh base = loadMesh(writeFile("tent_cov.obj", kTent));
+  CHECK(base.origin == dvec3(0.5, 0.5, 1.0));  // the box [0,1]x[0,1]x[0,2]'s centre
+  for (const vec3 t : {vec3(100, 0, 0), vec3(12345.678f, -271.828f, 0.5f), vec3(-3.3f, 6.6f, 1e6f)}) {
+    CAPTURE(t.x, t.y, t.z);
+    std::string obj;
+    for (const vec3& p : {vec3(0, 0, 0), vec3(1, 0, 0), vec3(0, 1, 0), vec3(0, 0, 2)}) {
+      REQUIRE(dvec3(p + t) == dvec3(p) + dvec3(t));  // the moved file is the mesh moved exactly
+      obj += fmt::format("v {} {} {}\n", p.x + t.x, p.y + t.y, p.z + t.z);
+    }
+    obj += std::string(kTent).substr(std::string(kTent).find("vt"));
+    const Mesh m = loadMesh(writeFile("tent_cov_moved.obj", obj));
+    CHECK(m.origin == base.origin + dvec3(t));
+    CHECK(m.positions == base.positions);  // bit for bit
+  }
+  // A mesh symmetric about the world's origin keeps its positions, bit for bit.
+  const Mesh sym = loadMesh(writeFile("sym.obj", "v -1 -0.3 -2\nv 1 -0.3 2\nv -1 0.3 2\nv 1 0.3 -2\nf 1 2 3\nf 1 4 2\n"));
+  CHECK(sym.origin == dvec3(0.0));
+  CHECK(sym.positions == std::vector<vec3>{vec3(-1, -0.3f, -2), vec3(1, -0.3f, 2), vec3(-1, 0.3f, 2), vec3(1, 0.3f, -2)});
+  // The centre is not rounded to a float: 2^24 + 1 is none.
+  const Mesh odd = loadMesh(writeFile("odd.obj", "v 16777216 0 0\nv 16777218 0 0\nv 16777216 1 0\nf 1 2 3\n"));
+  CHECK(odd.origin == dvec3(16777217.0, 0.5, 0.0));
+  CHECK(odd.positions == std::vector<vec3>{vec3(-1, -0.5f, 0), vec3(1, -0.5f, 0), vec3(-1, 0.5f, 0)});
+}
+
 namespace {
 
 // The quad's glTF with its mesh at the end of a chain of `levels` nodes; `extra` is
