@@ -135,7 +135,9 @@ struct MeshGpu {
   uint lodFirst;
   int lodNext;
   float lod;
-  int pad;
+  // Always 0 (the record is zero-initialised): prism.rint rounds the ray into the frame
+  // through it, a value the shader compiler cannot see.
+  int zero;
 };
 
 // Intersection -> closest-hit attributes (displaced prisms).
