@@ -238,6 +238,25 @@ auto onLargeStack(F&& f) -> decltype(f()) {
   return std::move(*job.result);
 }
 
+// recentreMesh over the triangles whose `skip` entry is 0 (all of them: skip null).
+void recentre(Mesh& m, const std::vector<uint8_t>* skip) {
+  dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  for (size_t i = 0; i < m.triangles.size(); ++i)
+    if (!skip || !(*skip)[i])
+      for (int c = 0; c < 3; ++c) {
+        const dvec3 w = m.world(m.triangles[i][c]);
+        lo = glm::min(lo, w), hi = glm::max(hi, w);
+      }
+  if (!(lo.x <= hi.x)) return;
+  // min and max move exactly with the mesh, and so does their mean wherever it is exact
+  // in double (float coordinates: whenever lo and hi are within a factor 2^29 of each
+  // other, or one is 0). Not rounded to float: a float centre rounds differently at
+  // different offsets, and the positions with it.
+  const dvec3 centre = 0.5 * (lo + hi);
+  for (vec3& p : m.positions) p = roundToFloat(m.origin + dvec3(p) - centre);
+  m.origin = centre;
+}
+
 }  // namespace
 
 void computeSmoothNormals(Mesh& m) {
@@ -250,8 +269,9 @@ void transformMesh(Mesh& m, const glm::mat4& transform) {
   const float det = glm::determinant(l);
   if (!(det != 0.0f) || !std::isfinite(det)) fail(m.name, "transform is singular or not finite");
   const glm::mat3 normalMatrix = glm::inverseTranspose(l);
-  // The translation goes to the frame's origin, not into the positions: a mesh moved far
-  // away keeps the float positions (and so the micro-geometry) it has at the origin.
+  // The translation goes to the frame's origin (in double), not into the positions: a
+  // mesh moved far away keeps the float positions (and so the micro-geometry) it has at
+  // the origin.
   const vec3 translation(transform[3]);
   if (!std::isfinite(translation.x) || !std::isfinite(translation.y) || !std::isfinite(translation.z))
     fail(m.name, "transform produces a non-finite position");
@@ -260,12 +280,7 @@ void transformMesh(Mesh& m, const glm::mat4& transform) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       fail(m.name, "transform produces a non-finite position");
   }
-  const dvec3 o = dvec3(m.origin) + dvec3(translation);
-  m.origin = roundToFloat(o);
-  if (dvec3(m.origin) != o) {  // not a float: keep the world positions, move the rest
-    const dvec3 rest = o - dvec3(m.origin);
-    for (vec3& p : m.positions) p = vec3(dvec3(p) + rest);
-  }
+  m.origin += dvec3(translation);
   for (vec3& n : m.normals) n = glm::normalize(normalMatrix * n);
   // A mirroring transform flips the geometric normal (cross product) against the vertex
   // normals; swapping two indices keeps the winding consistent with the normals.
@@ -300,6 +315,11 @@ void finishMesh(Mesh& m, const MeshLoadOptions& opts) {
   }
   fixNormals(m);
   if (opts.transform != glm::mat4(1.0f)) transformMesh(m, opts.transform);
+  // The frame comes before the float checks, which must see the positions the renderer
+  // uses (rounded into the frame). Its box is over the triangles the exact test kept:
+  // which ones the float checks drop depends on the frame, and the frame must depend on
+  // the mesh only, not on where it sits.
+  recentre(m, &why);
 
   // After the transform, with the float quantities the renderer uses (DisplacedTriangle).
   size_t zeroArea = 0, zeroUV = 0, first = m.triangles.size();
@@ -349,27 +369,9 @@ void finishMesh(Mesh& m, const MeshLoadOptions& opts) {
   if (skipped > 0 && opts.warn)
     eprint("oblong: warning: {}: skipped {} of {} triangles as degenerate ({}; first: triangle {})\n",
                m.name, skipped, total, detail, first);
-  recentreMesh(m);
 }
 
-void recentreMesh(Mesh& m) {
-  dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
-  for (const glm::uvec3& f : m.triangles)
-    for (int c = 0; c < 3; ++c) lo = glm::min(lo, dvec3(m.positions[f[c]])), hi = glm::max(hi, dvec3(m.positions[f[c]]));
-  if (!(lo.x <= hi.x)) return;
-  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  const dvec3 centre = 0.5 * (lo + hi);
-  const double far = std::max({std::abs(centre.x), std::abs(centre.y), std::abs(centre.z)});
-  if (!(far > extent) || !(extent > 0.0)) return;
-  // A multiple of a power of two no larger than the extent: the positions minus it are
-  // exact in float (they keep their own bits and shrink to the extent's magnitude).
-  const double grid = std::exp2(std::floor(std::log2(extent)));
-  const dvec3 shift = glm::round(centre / grid) * grid;
-  const dvec3 o = dvec3(m.origin) + shift;
-  m.origin = roundToFloat(o);
-  const dvec3 moved = dvec3(m.origin) - (o - shift);  // what the origin actually moved by
-  for (vec3& p : m.positions) p = vec3(dvec3(p) - moved);
-}
+void recentreMesh(Mesh& m) { recentre(m, nullptr); }
 
 namespace {
 

@@ -15,11 +15,13 @@ namespace oblong {
 struct Mesh {
   std::string name;  // file path or "<procedural ...>"
   // The mesh's frame: a vertex lies at origin + positions[v] in the world (the sum taken
-  // exactly, in double). Everything that depends on the geometry (micro-geometry, prisms,
-  // the traversal, the tessellation) is computed from `positions`; rays are moved into the
-  // frame by subtracting `origin` (docs/decisions.md, "Mesh frames"). `origin` is the
-  // scene transform's translation, plus the mesh's centre when its box lies far from it.
-  vec3 origin{0.0f};
+  // in double). Everything that depends on the geometry (micro-geometry, prisms, the
+  // traversal, the tessellation) is computed from `positions`; rays are moved into the
+  // frame by subtracting `origin` in double and rounding once (docs/decisions.md, "Mesh
+  // frames"). finishMesh puts `origin` at the centre of the mesh's box of world positions
+  // (recentreMesh): a rule that moves with the mesh, so the same mesh anywhere has the
+  // same `positions`.
+  dvec3 origin{0.0};
   std::vector<vec3> positions;
   std::vector<vec3> normals;  // unit length, one per position
   std::vector<vec2> uvs;      // empty when the file has none
@@ -33,8 +35,8 @@ struct Mesh {
   bool hasUVs() const { return !uvs.empty(); }
   // Triangle i in the mesh's frame (positions, not world coordinates).
   DisplacedTriangle triangle(size_t i) const;
-  // Vertex v in the world, in double (exact).
-  dvec3 world(size_t v) const { return dvec3(origin) + dvec3(positions[v]); }
+  // Vertex v in the world, in double.
+  dvec3 world(size_t v) const { return origin + dvec3(positions[v]); }
   size_t bytes() const;
 };
 
@@ -59,9 +61,10 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts = {});
 // The checks every mesh goes through (loaded or generated), in this order: triangles
 // with zero area (or, when needUVs, zero uv area) are marked degenerate; zero and
 // non-finite normals are replaced by smooth ones (fixNormals); the transform is applied;
-// degenerate triangles are dropped with one warning line on stderr ("oblong: warning:
-// NAME: skipped K of N degenerate triangles (...)"); the frame is recentred
-// (recentreMesh). Errors (naming m.name): every
+// the frame is recentred (recentreMesh, over the triangles not marked so far); the float
+// checks run on the recentred positions; degenerate triangles are dropped with one
+// warning line on stderr ("oblong: warning: NAME: skipped K of N degenerate triangles
+// (...)"). Errors (naming m.name): every
 // triangle degenerate, a triangle whose area overflows a float, a vertex or (when
 // needUVs) a triangle interior where the normals cancel, a used vertex beyond
 // kMaxCoordinate after the transform.
@@ -72,10 +75,12 @@ void computeSmoothNormals(Mesh& m);
 // Applies the transform's linear part to positions and normals (normals renormalised);
 // its translation is added to m.origin.
 void transformMesh(Mesh& m, const glm::mat4& transform);
-// Moves the frame's origin to the centre of the mesh's box (rounded to a power of two
-// below the box's size, so that the move is exact) when the box lies farther from the
-// origin than its own size: precision then depends on the mesh's extent, not on where
-// it sits. No-op otherwise.
+// Moves the frame's origin to the centre of the box of the triangles' world positions
+// (min, max and their mean in double, so the centre moves exactly with the mesh) and
+// the positions to float(world − origin), rounded once. Precision then depends on the
+// mesh's extent, not on where it sits, and the same mesh translated by any T whose
+// world positions stay exact gets the same positions bit for bit. A mesh symmetric
+// about the world's origin keeps its positions.
 void recentreMesh(Mesh& m);
 
 }  // namespace oblong

@@ -224,7 +224,7 @@ void userBounds(const RTCBoundsFunctionArguments* args) {
   AABB b = ug->intersector->bounds(args->primID);
   if (!b.isEmpty()) {  // into the world, padded for Embree's box test (framePad)
     BoxD w{dvec3(b.lo) + ug->origin, dvec3(b.hi) + ug->origin};
-    w.pad(framePad(b, vec3(ug->origin)));
+    w.pad(framePad(b, ug->origin));
     b = w.toFloatOutward();
   }
   RTCBounds* o = args->bounds_o;
@@ -419,7 +419,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
       traversalName_ = g->intersector->name();
       RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
       rtcSetGeometryUserPrimitiveCount(geom, unsigned(g->intersector->size()));
-      g->user = {g->intersector.get(), dvec3(mesh.origin)};
+      g->user = {g->intersector.get(), mesh.origin};
       rtcSetGeometryUserData(geom, &g->user);
       rtcSetGeometryBoundsFunction(geom, userBounds, nullptr);
       rtcSetGeometryIntersectFunction(geom, [](const RTCIntersectFunctionNArguments* a) { userIntersect<false>(a); });
@@ -448,7 +448,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
         const uint32_t base = uint32_t(g->vertices.size());
         Patch& p = patches[ti];
         // Built in the mesh's frame, traced by Embree in the world (rounded once).
-        for (const vec4& v : p.vertices) g->vertices.emplace_back(vec3(dvec3(vec3(v)) + dvec3(mesh.origin)), 0.0f);
+        for (const vec4& v : p.vertices) g->vertices.emplace_back(vec3(dvec3(vec3(v)) + mesh.origin), 0.0f);
         g->uvs.insert(g->uvs.end(), p.uvs.begin(), p.uvs.end());
         for (const auto& t : p.indices) g->indices.push_back(t + base);
         g->basePrim.insert(g->basePrim.end(), p.indices.size(), uint32_t(ti));

@@ -171,7 +171,7 @@ void shadingNormals(const Scene& scene, const std::vector<std::vector<DisplacedT
   const SceneMesh& sm = scene.meshes[size_t(h.mesh)];
   const DisplacedTriangle& T = triangles[size_t(h.mesh)][size_t(h.prim)];
   // Displaced hits carry T's uv (exact barycentrics); plain ones only the point.
-  vec2 b = sm.displacement ? T.baryOfUV(h.uv) : baryOfPoint(T, vec3(dvec3(r.at(h.t)) - dvec3(sm.mesh.origin)));
+  vec2 b = sm.displacement ? T.baryOfUV(h.uv) : baryOfPoint(T, vec3(dvec3(r.at(h.t)) - sm.mesh.origin));
   b = glm::clamp(b, vec2(0.0f), vec2(1.0f));  // rounding can leave T by an ulp
   if (b.x + b.y > 1.0f) b /= b.x + b.y;
   const vec3 n = smoothDisplacedNormal(T, sm.displacement ? &*sm.displacement : nullptr, b.x, b.y);

@@ -39,6 +39,10 @@ const char* kTent =
 
 bool near(const vec3& a, const vec3& b, float eps = 1e-6f) { return glm::length(a - b) <= eps; }
 
+// Vertex v in the world, as a float (the file's coordinates for these small meshes:
+// `positions` are in the mesh's frame, centred on its box).
+vec3 at(const Mesh& m, size_t v) { return vec3(m.world(v)); }
+
 }  // namespace
 
 TEST_CASE("OBJ with uvs and normals: positions, uvs, triangles, normals normalised", "[mesh]") {
@@ -56,7 +60,7 @@ TEST_CASE("OBJ with uvs and normals: positions, uvs, triangles, normals normalis
   for (size_t v = 0; v < 4; ++v) {
     INFO("vertex " << v);
     CHECK(near(m.normals[v], vec3(0, 0, 1)));
-    CHECK(m.uvs[v] == vec2(m.positions[v].x, m.positions[v].y));  // uv = xy for this quad
+    CHECK(m.uvs[v] == vec2(at(m, v).x, at(m, v).y));  // uv = xy for this quad
   }
   // Both triangles keep their winding (normal +z) and cover the quad.
   float area = 0;
@@ -88,7 +92,7 @@ TEST_CASE("ASCII PLY with uvs: quads are triangulated", "[mesh]") {
   REQUIRE(m.positions.size() == 4);
   REQUIRE(m.hasUVs());
   for (size_t v = 0; v < 4; ++v) {
-    CHECK(m.uvs[v] == vec2(m.positions[v].x / 2, m.positions[v].y / 2));
+    CHECK(m.uvs[v] == vec2(at(m, v).x / 2, at(m, v).y / 2));
     CHECK(near(m.normals[v], vec3(0, 0, 1)));  // computed: the file has none
   }
 }
@@ -102,7 +106,7 @@ TEST_CASE("smooth normals are area-weighted, unit, and shared across uv seams", 
   const vec3 shared = glm::normalize(vec3(-2, 0, 1));
   std::map<std::tuple<float, float, float>, vec3> byPosition;
   for (size_t v = 0; v < m.positions.size(); ++v) {
-    const vec3 p = m.positions[v], n = m.normals[v];
+    const vec3 p = at(m, v), n = m.normals[v];
     INFO("vertex " << v << " at " << p.x << " " << p.y << " " << p.z);
     CHECK(glm::length(n) == Approx(1.0f).epsilon(1e-6));
     if (p == vec3(1, 0, 0)) CHECK(near(n, vec3(0, 0, 1)));
@@ -142,7 +146,7 @@ TEST_CASE("several objects in one file are concatenated", "[mesh]") {
   for (const auto& f : m.triangles)
     for (int k = 0; k < 3; ++k) {
       REQUIRE(f[k] < m.positions.size());
-      box.extend(m.positions[f[k]]);
+      box.extend(at(m, f[k]));
     }
   CHECK(box.lo == vec3(0, 0, 0));
   CHECK(box.hi == vec3(6, 1, 0));
@@ -155,10 +159,12 @@ TEST_CASE("transforms move positions and normals (inverse transpose)", "[mesh]")
   const glm::mat4 T = glm::translate(glm::mat4(1.0f), vec3(1, 2, 3)) * glm::scale(glm::mat4(1.0f), vec3(2, 1, 1));
   const Mesh m = loadMesh(path, {T, false});
   REQUIRE(m.positions.size() == base.positions.size());
-  CHECK(m.origin == vec3(1, 2, 3));  // the translation is the frame's, not the positions'
+  // The translation is the frame's, not the positions': the origin is the translation
+  // plus the linear part's image of the untransformed mesh's centre.
+  CHECK(m.origin == dvec3(1, 2, 3) + dvec3(glm::mat3(T) * vec3(base.origin)));
   for (size_t v = 0; v < m.positions.size(); ++v) {
-    const vec3 p = base.positions[v];
-    CHECK(m.positions[v] == vec3(2 * p.x, p.y, p.z));
+    const vec3 p = at(base, v), q = base.positions[v];
+    CHECK(m.positions[v] == vec3(2 * q.x, q.y, q.z));
     CHECK(near(vec3(m.world(v)), vec3(2 * p.x + 1, p.y + 2, p.z + 3)));
     if (near(base.normals[v], glm::normalize(vec3(-2, 0, 1))))
       CHECK(near(m.normals[v], glm::normalize(vec3(-1, 0, 1))));
@@ -237,7 +243,7 @@ TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map, high: the re
   CHECK(m.positions.size() == 262);  // 242 distinct positions, 20 split at uv seams
   REQUIRE(m.hasUVs());
   AABB box;
-  for (const vec3& p : m.positions) box.extend(p);
+  for (size_t v = 0; v < m.positions.size(); ++v) box.extend(at(m, v));
   CHECK(box.lo.x == Approx(-1.2756f).margin(1e-3));
   CHECK(box.hi.x == Approx(1.1518f).margin(1e-3));
   CHECK(box.lo.y == Approx(-0.8847f).margin(1e-3));
@@ -410,7 +416,7 @@ std::string quadGlb() {
 
 std::map<std::tuple<float, float, float>, vec2> uvByPosition(const Mesh& m) {
   std::map<std::tuple<float, float, float>, vec2> r;
-  for (size_t v = 0; v < m.positions.size(); ++v) r[{m.positions[v].x, m.positions[v].y, m.positions[v].z}] = m.uvs[v];
+  for (size_t v = 0; v < m.positions.size(); ++v) r[{at(m, v).x, at(m, v).y, at(m, v).z}] = m.uvs[v];
   return r;
 }
 
@@ -462,8 +468,8 @@ TEST_CASE("normals \"smooth\": per-face normals of split vertices become one nor
   REQUIRE(s.positions.size() == 24);
   std::map<std::tuple<float, float, float>, std::vector<vec3>> fileNormals, smoothNormals;
   for (size_t v = 0; v < 24; ++v) {
-    const vec3 p = s.positions[v];
-    fileNormals[{file.positions[v].x, file.positions[v].y, file.positions[v].z}].push_back(file.normals[v]);
+    const vec3 p = at(s, v);
+    fileNormals[{at(file, v).x, at(file, v).y, at(file, v).z}].push_back(file.normals[v]);
     smoothNormals[{p.x, p.y, p.z}].push_back(s.normals[v]);
     CHECK(glm::length(s.normals[v]) == Approx(1.0f));
     CHECK(glm::dot(s.normals[v], glm::normalize(p - vec3(0.5f))) > 0.9f);  // outwards, between the three faces
@@ -606,7 +612,7 @@ TEST_CASE("PLY headers assimp would misread are refused, and its quirks are work
   const Mesh lf = loadMesh(writeFile("lf_first.ply", head + bytesOf(v, 36) + "\x03" + bytesOf(f, 12)));
   REQUIRE(lf.triangles.size() == 1);
   std::set<std::tuple<float, float, float>> got, want;
-  for (const vec3& p : lf.positions) got.insert({p.x, p.y, p.z});
+  for (size_t k = 0; k < lf.positions.size(); ++k) got.insert({at(lf, k).x, at(lf, k).y, at(lf, k).z});
   for (int k = 0; k < 3; ++k) want.insert({v[3 * k], v[3 * k + 1], v[3 * k + 2]});
   CHECK(got == want);
 
@@ -646,17 +652,19 @@ TEST_CASE("a mesh far from the origin gets its own frame: same positions whereve
     CAPTURE(d);
     const vec3 t(float(d), float(-d), float(d));
     const Mesh m = loadMesh(path, {glm::translate(glm::mat4(1.0f), t), false});
-    CHECK(m.origin == t);
+    CHECK(m.origin == dvec3(t) + base.origin);
     CHECK(m.positions == base.positions);  // bit for bit
-    for (size_t v = 0; v < m.positions.size(); ++v) CHECK(m.world(v) == dvec3(t) + dvec3(base.positions[v]));
+    for (size_t v = 0; v < m.positions.size(); ++v) CHECK(m.world(v) == dvec3(t) + base.world(v));
   }
-  // A mesh whose own coordinates lie far away is recentred: the move is exact (a
-  // multiple of a power of two below the mesh's size) and the world positions stay.
+  // A mesh whose own coordinates lie far away is recentred: the origin moves to its box
+  // centre (in double), the world positions stay, and the positions are the ones the
+  // mesh has anywhere else.
   Mesh far = base;
   for (vec3& p : far.positions) p += vec3(3e5f, 0.0f, -7e5f);
   const Mesh kept = far;
   recentreMesh(far);
-  CHECK(far.origin != vec3(0.0f));
+  CHECK(far.origin == base.origin + dvec3(3e5, 0.0, -7e5));
+  CHECK(far.positions == base.positions);
   float extent = 0;
   for (size_t v = 0; v < far.positions.size(); ++v) {
     CHECK(far.world(v) == kept.world(v));
@@ -664,9 +672,38 @@ TEST_CASE("a mesh far from the origin gets its own frame: same positions whereve
   }
   CHECK(extent < 10.0f);
   Mesh near0 = base;
-  recentreMesh(near0);  // already around the origin: unchanged
-  CHECK(near0.origin == vec3(0.0f));
+  recentreMesh(near0);  // already recentred: unchanged
+  CHECK(near0.origin == base.origin);
   CHECK(near0.positions == base.positions);
+}
+
+TEST_CASE("the frame's origin is the box centre in double: the same mesh authored anywhere gets the same positions",
+          "[mesh][translation]") {
+  // The tent at the origin, and written into its file at offsets that keep its
+  // coordinates floats (non-powers of two; the second is far, the third not a float
+  // grid point of the old power-of-two rule).
+  const Mesh base = loadMesh(writeFile("tent_cov.obj", kTent));
+  CHECK(base.origin == dvec3(0.5, 0.5, 1.0));  // the box [0,1]x[0,1]x[0,2]'s centre
+  for (const vec3 t : {vec3(100, 0, 0), vec3(12345.678f, -271.828f, 0.5f), vec3(-3.3f, 6.6f, 1e6f)}) {
+    CAPTURE(t.x, t.y, t.z);
+    std::string obj;
+    for (const vec3& p : {vec3(0, 0, 0), vec3(1, 0, 0), vec3(0, 1, 0), vec3(0, 0, 2)}) {
+      REQUIRE(dvec3(p + t) == dvec3(p) + dvec3(t));  // the moved file is the mesh moved exactly
+      obj += fmt::format("v {} {} {}\n", p.x + t.x, p.y + t.y, p.z + t.z);
+    }
+    obj += std::string(kTent).substr(std::string(kTent).find("vt"));
+    const Mesh m = loadMesh(writeFile("tent_cov_moved.obj", obj));
+    CHECK(m.origin == base.origin + dvec3(t));
+    CHECK(m.positions == base.positions);  // bit for bit
+  }
+  // A mesh symmetric about the world's origin keeps its positions, bit for bit.
+  const Mesh sym = loadMesh(writeFile("sym.obj", "v -1 -0.3 -2\nv 1 -0.3 2\nv -1 0.3 2\nv 1 0.3 -2\nf 1 2 3\nf 1 4 2\n"));
+  CHECK(sym.origin == dvec3(0.0));
+  CHECK(sym.positions == std::vector<vec3>{vec3(-1, -0.3f, -2), vec3(1, -0.3f, 2), vec3(-1, 0.3f, 2), vec3(1, 0.3f, -2)});
+  // The centre is not rounded to a float: 2^24 + 1 is none.
+  const Mesh odd = loadMesh(writeFile("odd.obj", "v 16777216 0 0\nv 16777218 0 0\nv 16777216 1 0\nf 1 2 3\n"));
+  CHECK(odd.origin == dvec3(16777217.0, 0.5, 0.0));
+  CHECK(odd.positions == std::vector<vec3>{vec3(-1, -0.5f, 0), vec3(1, -0.5f, 0), vec3(-1, 0.5f, 0)});
 }
 
 namespace {

@@ -91,14 +91,14 @@ TEST_CASE("a valid scene round trip", "[scene]") {
   CHECK(a.displacement->map->atUnchecked(0, 0) == Approx(0.8f).margin(0.5 / 255));  // flipped: last row first
   // Scale 2, then 90 degrees about z, then translate: (1,0,0) -> (2,0,0) -> (0,2,0) -> (10,2,0).
   for (size_t v = 0; v < a.mesh.positions.size(); ++v) {
-    const vec3 p = s.meshes[2].mesh.positions[v];  // untransformed copy
+    const vec3 p(s.meshes[2].mesh.world(v));  // untransformed copy
     CHECK(near(vec3(a.mesh.world(v)), vec3(10 - 2 * p.y, 2 * p.x, 2 * p.z)));
     CHECK(near(a.mesh.normals[v], vec3(0, 0, 1)));
   }
   // Row-major matrix: x' = 2x + 1.
   const SceneMesh& b = s.meshes[1];
   for (size_t v = 0; v < b.mesh.positions.size(); ++v) {
-    const vec3 p = s.meshes[2].mesh.positions[v];
+    const vec3 p(s.meshes[2].mesh.world(v));
     CHECK(near(vec3(b.mesh.world(v)), vec3(2 * p.x + 1, p.y, p.z)));
   }
   CHECK(b.displacement->tiling == vec2(4, 4));
@@ -390,9 +390,10 @@ TEST_CASE("normals: \"smooth\" replaces the file's normals, \"file\" keeps them"
   for (int k = 0; k < 2; ++k) {
     const Mesh& m = s.meshes[size_t(k) + 1].mesh;
     std::map<std::tuple<float, float, float>, std::set<std::tuple<float, float, float>>> byPosition;
-    for (size_t v = 0; v < m.positions.size(); ++v)
-      byPosition[{m.positions[v].x, m.positions[v].y, m.positions[v].z}].insert(
-          {m.normals[v].x, m.normals[v].y, m.normals[v].z});
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+      const vec3 p(m.world(v));  // the file's coordinates (positions are in the mesh's frame)
+      byPosition[{p.x, p.y, p.z}].insert({m.normals[v].x, m.normals[v].y, m.normals[v].z});
+    }
     const auto& edge = byPosition.at({0.0f, 0.0f, 0.0f});
     CHECK(edge.size() == (k == 0 ? 2u : 1u));  // the file's two normals, or one shared one
   }

@@ -131,10 +131,10 @@ class Intersector {
 // the conformance suites run every other one against the oracle.
 // Padding of a prism's box traced in the world at `origin` + box (a mesh's frame):
 // Embree's ray/box test for user geometry and GPU implementations' box tests are not
-// robust (t = lo·(1/d) − o·(1/d) in float, off by about |o|·2^-24 along each axis; the
-// GPU also rounds the instance's transformed box to nearest). 2^-22 of the box's world
-// magnitude covers rays starting within about twice that magnitude.
-inline double framePad(const AABB& local, const vec3& origin) {
+// robust (t = lo·(1/d) − o·(1/d) in float, off by about |o|·2^-24 along each axis).
+// 2^-22 of the box's world magnitude covers rays starting within about twice that
+// magnitude.
+inline double framePad(const AABB& local, const dvec3& origin) {
   double m = 0;
   for (int a = 0; a < 3; ++a)
     m = std::max({m, std::abs(double(local.lo[a]) + origin[a]), std::abs(double(local.hi[a]) + origin[a])});

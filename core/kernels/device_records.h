@@ -109,6 +109,10 @@ struct TriGpu {
 
 // One mesh of the scene (the TLAS instance's custom index).
 struct MeshGpu {
+  // Mesh::origin. The instances' transforms are the identity (a double origin is not a
+  // float transform): displaced prisms' boxes are in the world, and the intersection
+  // shader moves the world ray into the frame as EmbreeScene's callbacks do.
+  dvec3 origin;
   uint triOffset;   // first TriGpu of this mesh (displaced)
   uint texelOffset; // first texel of its height map
   int W, H;         // map size
@@ -124,7 +128,6 @@ struct MeshGpu {
   int chunkShift;   // log2 of the elements per texel / RMIP buffer (OBLONG_CHUNKS)
   uint indexOffset;  // plain: first index (3 per triangle)
   uint vertexOffset; // plain: first vertex
-  float originX, originY, originZ;  // Mesh::origin: the instance's translation
   float sampleOffset;  // Displacement::sampleOffset: uv 0 is at sample -sampleOffset (LoD)
   // A λ per ray (docs/lod.md): a scene mesh's record has lodLevels > 0 and its levels'
   // records at lodFirst + k (after the scene's meshes); a ray at λ reads level ⌊λ⌋'s.
@@ -133,6 +136,9 @@ struct MeshGpu {
   uint lodFirst;
   int lodNext;
   float lod;
+  // Always 0 (the record is zero-initialised): prism.rint rounds the ray into the frame
+  // through it, a value the shader compiler cannot see.
+  int zero;
 };
 
 // Intersection -> closest-hit attributes (displaced prisms).

@@ -15,6 +15,11 @@ A mismatch (hit/miss differs, or |Δt| > 1e-5·max(|t|, 1e-3)) in an exact confi
 fails the experiment. Pre-tessellation (Embree's own triangle test) and fixed-step
 marching are reported, not required to match.
 
+The translated strip: one strip traced at the origin and at three other placements (two
+authored there, one through the scene transform) with the same grazing rays moved with
+it, canonical and brute force; more than 1e-4 of the rays whose hit differs between two
+placements (hit/miss, t, uv, bit for bit) fails the experiment (translated_strip.csv).
+
     /usr/bin/python3 experiments/stability/run.py [--quick] [--build DIR] [--out DIR]
 """
 import math
@@ -452,6 +457,120 @@ def spawned(rays, hits, fam, c, diag, rng):
 
 
 # ---------------------------------------------------------------------------------------
+# Translated strip: the same strip at the origin and elsewhere, the same rays moved with it
+# (docs/decisions.md, "Mesh frames"). Its 320 000 texels along 100 units are a few dozen
+# float ulps wide; a mesh's frame that follows the mesh makes every hit identical.
+
+STRIP_PLACEMENTS = [  # (name, offset, through the scene transform)
+    ("authored at x + 100", (100.0, 0.0, 0.0), False),
+    ("authored at + (12345.678, -271.828, 0)", (12345.678, -271.828, 0.0), False),
+    ("moved by the transform (12345.678, -271.828, 3.3)", (12345.678, -271.828, 3.3), True),
+]
+STRIP_MAX_DIFFERING = 1e-4  # fraction of rays allowed to differ between placements
+
+
+def strip_obj(path, offset):
+    """50 quads of 2 × 0.01 along x ∈ [0, 100], normal +y, u along x, moved by `offset`
+    (float32 arithmetic; the offsets used keep the coordinates exact)."""
+    import numpy as np
+
+    off = f32(offset)
+    lines = []
+    for i in range(51):
+        for z, v in ((0.0, 0.0), (0.01, 1.0)):
+            q = f32([2.0 * i, 0.0, z])
+            p = q + off
+            assert all(float(c) == float(a) + float(b) for c, a, b in zip(p, q, off)), "strip coordinates not exact"
+            lines.append("v {} {} {}\nvt {} {}\nvn 0 1 0".format(*(str(np.float32(c)) for c in p), i / 50, v))
+    for i in range(50):
+        a, b, c, d = 2 * i + 1, 2 * i + 2, 2 * i + 3, 2 * i + 4
+        lines.append(f"f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}\nf {c}/{c}/{c} {b}/{b}/{b} {d}/{d}/{d}")
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+def strip_rays(count, rng):
+    """Grazing rays over the strip (0.5–2.5° down, any heading in the xz plane) starting
+    just above the shell, origins on a grid (x 2^-10, y 2^-15, z 2^-22) on which the
+    offsets' sums are exact."""
+    import numpy as np
+
+    x, z, y = 5 + 90 * rng.uniform(size=count), 0.01 * rng.uniform(size=count), 0.0011 + 0.0002 * rng.uniform(size=count)
+    phi, a = 2 * np.pi * rng.uniform(size=count), np.radians(0.5 + 2.0 * rng.uniform(size=count))
+    d = np.stack([np.cos(phi) * np.cos(a), -np.sin(a), np.sin(phi) * np.cos(a)], 1)
+    o = np.stack([np.round((x - 0.02 * d[:, 0]) * 2.0**10) / 2.0**10, np.round(y * 2.0**15) / 2.0**15,
+                  np.round((z - 0.02 * d[:, 2]) * 2.0**22) / 2.0**22], 1)
+    r = np.zeros((count, 8))
+    r[:, 0:3], r[:, 3:6], r[:, 7] = o, d, np.inf
+    return r.astype(np.float32)
+
+
+def strip_differences(a, b):
+    """Rays whose hits differ between two placements: hit/miss, t, or (same triangle) uv,
+    bit for bit (the hit files print floats round-trip); equal t on two triangles sharing
+    an edge is a tie, not a difference."""
+    import numpy as np
+
+    ha, hb = np.isfinite(a["t"]), np.isfinite(b["t"])
+    both = ha & hb
+    same_t = both & (a["t"] == np.where(hb, b["t"], 0))
+    tie = same_t & (a["prim"] != b["prim"])
+    same = (~ha & ~hb) | (same_t & (((a["prim"] == b["prim"]) & (a["u"] == b["u"]) & (a["v"] == b["v"])) | tie))
+    ta, tb = np.where(both, a["t"], 0), np.where(both, b["t"], 0)
+    rel = np.abs(ta - tb) > 0.01 * np.abs(ta)
+    return {"differing": int((~same).sum()), "hit_miss_differ": int((ha != hb).sum()),
+            "t_differ_1pct": int((both & rel).sum()), "ties": int(tie.sum())}
+
+
+def translated_strip(ctx):
+    """Rows (placement × configuration) and failures of the translated-strip comparison."""
+    import numpy as np
+    import png16
+
+    mp = ctx.tmp("strip", "strip_map.png")
+    png16.write_png16(str(mp), height_map(64, 64, 11))
+    disp = {"map": str(mp), "scale": 0.001, "tiling": [5000, 0.2]}
+
+    def scene(name, offset, transform):
+        obj = ctx.tmp("strip", f"{name}.obj")
+        strip_obj(obj, (0, 0, 0) if transform else offset)
+        mesh = {"file": str(obj), "displacement": disp}
+        if transform:
+            mesh["transform"] = {"translate": [float(np.float32(c)) for c in offset]}
+        return ctx.write_scene(f"strip_{name}", {"meshes": [mesh]})
+
+    rays = strip_rays(ctx.pick(20000, 500), np.random.default_rng(11))
+    n_brute = ctx.pick(200, 20)
+    configs_strip = [("canonical", [], rays), ("bruteforce", ["--baseline", "bruteforce"], rays[:n_brute])]
+    near = scene("origin", (0, 0, 0), False)
+
+    def trace(sc, rs, flags, label):
+        rp, out = ctx.tmp("strip", f"{label}_rays.bin"), ctx.tmp("strip", f"{label}.csv")
+        R.write_rays(rp, rs)
+        r = C.run_oblong(ctx, "trace", sc, list(flags) + ["--rays", rp, "-o", out], label=f"strip/{label}", threads=2)
+        return R.read_hits(out), r.stats["ray_counters"]["steps_per_ray"]
+
+    at_origin = {label: trace(near, rs, flags, f"origin_{label}") for label, flags, rs in configs_strip}
+    rows, failures = [], []
+    for k, (what, offset, transform) in enumerate(STRIP_PLACEMENTS):
+        sc = scene(f"placement{k}", offset, transform)
+        off = f32(offset)
+        for label, flags, rs in configs_strip:
+            moved = rs.copy()
+            moved[:, 0:3] = rs[:, 0:3] + off
+            if not np.array_equal(moved[:, 0:3].astype("f8"), rs[:, 0:3].astype("f8") + off.astype("f8")):
+                raise C.ExperimentError(f"translated strip {what}: a moved ray origin is not exact")
+            got, steps = trace(sc, moved, flags, f"placement{k}_{label}")
+            ref, steps0 = at_origin[label]
+            d = strip_differences(ref, got)
+            rows.append({"placement": what, "offset": " ".join(str(np.float32(c)) for c in offset), "config": label,
+                         "rays": len(rs), "hits_at_origin": int(np.isfinite(ref["t"]).sum()), **d,
+                         "steps_per_ray_at_origin": steps0, "steps_per_ray_moved": steps})
+            if d["differing"] > STRIP_MAX_DIFFERING * len(rs):
+                failures.append(f"translated strip {what}/{label}: {d['differing']} of {len(rs)} rays differ")
+    return rows, failures
+
+
+# ---------------------------------------------------------------------------------------
 
 
 def run(ctx):
@@ -521,6 +640,11 @@ def run(ctx):
         ctx.log(f"{case.name}: {len(allr)} rays ({nhits} oracle hits), "
                 f"{sum(1 for x in rows if x['case'] == case.name and x.get('exact_claimed') and x['mismatches'])} "
                 f"exact configurations with mismatches")
+    strip_rows, strip_failures = translated_strip(ctx)
+    failures += strip_failures
+    C.write_csv(ctx.out / "translated_strip.csv", strip_rows)
+    ctx.log(f"translated strip: {sum(r['differing'] for r in strip_rows)} of {sum(r['rays'] for r in strip_rows)} "
+            "rays differ between placements")
     fields = ["case", "what", "config", "exact_claimed", "geometry", "rays", "oracle_hits", "mismatches", "missed_hits",
               "false_hits", "t_mismatches", "max_abs_dt", "steps_per_ray", "box_only_prisms", "ill_posed_triangles",
               "rejected_inversions", "note"]
@@ -576,13 +700,24 @@ def run(ctx):
     fsr = sum(r["rays"] for r in info if r["config"] == "fixedstep")
     ref_txt = (f"; for reference, pre-tessellation {tess} of {tsr} and fixed-step marching {fs} of {fsr} rays differ"
                if info else "")
+    strip_txt = ("; translated strip (the same strip at the origin and at 3 other placements, the rays moved with "
+                 f"it): {sum(r['differing'] for r in strip_rows)} of {sum(r['rays'] for r in strip_rows)} rays differ "
+                 "between placements")
     verdict = (f"{len(case_names) - len(refused)} stiff scenes × {len(names)} exact configurations, {tot} ray traces: "
                f"{sum(r['mismatches'] for r in exact_rows)} mismatches against the oracle"
+               + strip_txt
                + (f" ({'; '.join(failures)})" if failures else "")
                + ref_txt
                + (f"; scenes refused by the loader: {'; '.join(refused)}" if refused else "") + ".")
-    return {"status": "mismatch" if failures else "ok", "verdict": verdict, "tables": [C.md_table(header, trows)],
-            "plots": ["stability.png"], "csv": ["results.csv"] + (["mismatches_by_family.csv"] if fam_rows else []),
+    strip_header = ["translated strip: placement", "config", "rays", "hits at the origin", "rays differing",
+                    "hit/miss", "t by > 1 %", "steps/ray at the origin → moved"]
+    strip_table = [[r["placement"], r["config"], r["rays"], r["hits_at_origin"], r["differing"], r["hit_miss_differ"],
+                    r["t_differ_1pct"], f"{r['steps_per_ray_at_origin']:.1f} → {r['steps_per_ray_moved']:.1f}"]
+                   for r in strip_rows]
+    return {"status": "mismatch" if failures else "ok", "verdict": verdict,
+            "tables": [C.md_table(header, trows), C.md_table(strip_header, strip_table)],
+            "plots": ["stability.png"],
+            "csv": ["results.csv", "translated_strip.csv"] + (["mismatches_by_family.csv"] if fam_rows else []),
             "failures": failures}
 
 

@@ -21,7 +21,7 @@
 
 namespace oblong::vk {
 
-inline constexpr uint32_t kBakeVersion = 4;
+inline constexpr uint32_t kBakeVersion = 5;  // 5: MeshGpu::origin in double, world boxes
 
 struct BakedScene {
   GpuRecords records;

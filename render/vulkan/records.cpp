@@ -21,7 +21,7 @@ using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1192 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 136 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 152 && sizeof(PushGpu) == 16);
 
 namespace {
 
@@ -116,8 +116,8 @@ void appendTraversal(GpuRecords& R, MeshGpu& m, const Intersector& is, const Int
     if (b.isEmpty()) {  // inactive (NaN min x): the triangle cannot be displaced
       a = {{std::nanf(""), 0, 0}, {0, 0, 0}};
     } else {
-      // In the mesh's frame, padded as the CPU pads its world boxes (framePad).
-      BoxD p{dvec3(b.lo), dvec3(b.hi)};
+      // In the world, padded and rounded outward as the CPU's world boxes (userBounds).
+      BoxD p{dvec3(b.lo) + mesh.origin, dvec3(b.hi) + mesh.origin};
       p.pad(framePad(b, mesh.origin));
       b = p.toFloatOutward();
       a = {{b.lo.x, b.lo.y, b.lo.z}, {b.hi.x, b.hi.y, b.hi.z}};
@@ -156,14 +156,16 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
     const SceneMesh& sm = scene.meshes[mi];
     const Mesh& mesh = sm.mesh;
     MeshGpu& m = meshes[mi];
-    m.originX = mesh.origin.x, m.originY = mesh.origin.y, m.originZ = mesh.origin.z;
+    m.origin = mesh.origin;
     R.baseTriangles += mesh.triangles.size();
     if (!sm.displacement) {
       m.indexOffset = uint32_t(plainIndex.size());
       m.vertexOffset = uint32_t(plainPos.size() / 3);
       for (const glm::uvec3& t : mesh.triangles) plainIndex.insert(plainIndex.end(), {t.x, t.y, t.z});
       for (size_t v = 0; v < mesh.positions.size(); ++v) {
-        plainPos.insert(plainPos.end(), {mesh.positions[v].x, mesh.positions[v].y, mesh.positions[v].z});
+        // In the world, rounded once, as EmbreeScene's triangles.
+        const vec3 p(mesh.world(v));
+        plainPos.insert(plainPos.end(), {p.x, p.y, p.z});
         plainUV.push_back(mesh.hasUVs() ? mesh.uvs[v] : glm::vec2(0.0f));
       }
       continue;

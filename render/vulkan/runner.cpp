@@ -26,7 +26,7 @@ using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1192 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 136 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 152 && sizeof(PushGpu) == 16);
 static_assert(sizeof(AabbGpu) == sizeof(VkAabbPositionsKHR) && offsetof(VkAabbPositionsKHR, maxX) == 12,
               "AabbGpu mirrors VkAabbPositionsKHR: the AABB buffer is copied as is");
 
@@ -626,11 +626,9 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
     const VkAccelerationStructureKHR blas = D.buildAS(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, count, bytes);
     blasBytes += bytes;
     VkAccelerationStructureInstanceKHR inst{};
-    // The mesh's frame: the traversal runs on the object-space ray (the world ray minus
-    // the origin, as EmbreeScene's callbacks compute it).
+    // The identity: prisms' boxes and plain triangles are in the world; the intersection
+    // shader moves the ray into the mesh's frame (MeshGpu::origin).
     inst.transform.matrix[0][0] = inst.transform.matrix[1][1] = inst.transform.matrix[2][2] = 1.0f;
-    inst.transform.matrix[0][3] = m.originX, inst.transform.matrix[1][3] = m.originY;
-    inst.transform.matrix[2][3] = m.originZ;
     inst.instanceCustomIndex = uint32_t(mi);
     inst.mask = 0xFF;
     inst.instanceShaderBindingTableRecordOffset = m.displaced ? OBLONG_HITGROUP_PRISM : OBLONG_HITGROUP_TRIANGLES;
