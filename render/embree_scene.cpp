@@ -6,6 +6,7 @@
 #include "traversal/prism.h"
 #include "traversal/traversal.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -316,6 +317,20 @@ std::string EmbreeScene::geometryName() const {
   return traversalName_.empty() ? "embree triangles (no displaced mesh)" : traversalName_;
 }
 
+std::string EmbreeScene::geometryText() const {
+  if (tessellate_)
+    return fmt::format("pre-tessellated (baseline), {} base triangles, {} micro-triangles", baseTriangles_,
+                       microTriangles_);
+  return TraceBackend::geometryText();
+}
+
+nlohmann::json EmbreeScene::device() const {
+  return {{"api", "embree"},
+          {"version", fmt::format("{}.{}.{}", rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_VERSION_MAJOR),
+                                  rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_VERSION_MINOR),
+                                  rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_VERSION_PATCH))}};
+}
+
 std::vector<EmbreeScene::PrismCounts> EmbreeScene::prismCounts() const {
   std::vector<PrismCounts> out;
   for (const auto& g : geoms_)
@@ -523,6 +538,32 @@ Hit EmbreeScene::intersect(const Ray& world, RayCounters* counters) const {
   const float len = glm::length(ng);
   h.ng = len > 0 ? ng / len : vec3(0.0f);
   return h;
+}
+
+double EmbreeScene::traceHits(RayKind, std::span<const Ray> rays, std::span<Hit> hits,
+                              std::span<RayCounters> counters) const {
+  const auto start = std::chrono::steady_clock::now();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 32), [&](const tbb::blocked_range<size_t>& b) {
+    for (size_t i = b.begin(); i < b.end(); ++i) {
+      RayCounters* c = counters.empty() ? nullptr : &counters[i];
+      if (c) *c = RayCounters{};
+      hits[i] = intersect(rays[i], c);
+    }
+  });
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double EmbreeScene::traceOcclusion(RayKind, std::span<const Ray> rays, std::span<uint8_t> blocked,
+                                   std::span<RayCounters> counters) const {
+  const auto start = std::chrono::steady_clock::now();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 32), [&](const tbb::blocked_range<size_t>& b) {
+    for (size_t i = b.begin(); i < b.end(); ++i) {
+      RayCounters* c = counters.empty() ? nullptr : &counters[i];
+      if (c) *c = RayCounters{};
+      blocked[i] = occluded(rays[i], c) ? 1 : 0;
+    }
+  });
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 bool EmbreeScene::occluded(const Ray& world, RayCounters* counters) const {

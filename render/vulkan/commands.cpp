@@ -6,7 +6,7 @@
 #include "render/output.h"
 #include "render/rays_io.h"
 #include "render/vulkan/bake_file.h"
-#include "render/vulkan/vulkan_render.h"
+#include "render/renderer.h"
 #include "render/vulkan/vulkan_scene.h"
 
 #include <fmt/core.h>
@@ -83,7 +83,7 @@ int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector
 
 int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOptions& ro, const std::string& out,
                   const std::string& aovs, const std::string& heatmap, const std::string& statsPath) {
-  checkRenderFits(ro);
+  checkBandsFit(ro);
   VulkanScene vs(scene, opts);
   if (ro.progress)
     ro.progress->phase(fmt::format("rendering {}x{} at {} spp on Vulkan", ro.size.x, ro.size.y, ro.spp),

@@ -20,7 +20,7 @@ int traceCommand(const Scene& scene, const AccelOptions& opts, const std::vector
                  const std::string& raysPath, const std::string& out, const std::string& statsPath,
                  const std::atomic<bool>* interrupt = nullptr);
 
-// Renders (any integrator, render/vulkan/vulkan_render.h); writes the image and the
+// Renders (any integrator, render() of render/renderer.h); writes the image and the
 // optional AOVs / heat map / stats. Interrupted (RenderOptions::interrupt) between
 // bands of samples: writes what was rendered, marked partial, and returns 130.
 int renderCommand(const Scene& scene, const AccelOptions& opts, const RenderOptions& ro, const std::string& out,
