@@ -96,4 +96,13 @@ class TraceBackend {
   virtual bool hostStatistics() const { return false; }
 };
 
+// The one convention for memory in every statistics file (`oblong --stats`,
+// oblong_vkbench --out): "memory", bytes per structure as integers, and "memory_total",
+// their sum. The console prints the same numbers in binary units (KiB, MiB, ...).
+inline void addMemoryJson(nlohmann::json& j, const MemoryReport& m) {
+  j["memory"] = nlohmann::json::object();
+  for (const MemoryItem& item : m) j["memory"][item.name] = item.bytes;
+  j["memory_total"] = totalBytes(m);
+}
+
 }  // namespace oblong
