@@ -298,6 +298,29 @@ RenderResult render(const Scene& scene, const TraceBackend& backend, const Rende
   return res;
 }
 
+TraceResult traceRays(const TraceBackend& backend, const std::vector<Ray>& rays, int threads,
+                      const std::atomic<bool>* interrupt) {
+  // In batches, so that Ctrl-C is answered within one batch and a device's staging
+  // memory stays bounded; each ray's answer does not depend on its batch.
+  constexpr size_t kBatch = size_t(1) << 18;
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+  TraceResult res;
+  res.hits.resize(rays.size());
+  std::vector<RayCounters> work;
+  for (size_t b = 0; b < rays.size(); b += kBatch) {
+    if (interrupt && interrupt->load()) break;
+    const size_t n = std::min(kBatch, rays.size() - b);
+    work.assign(n, RayCounters{});
+    res.seconds += backend.traceHits(RayKind::Camera, std::span<const Ray>(rays).subspan(b, n),
+                                     std::span<Hit>(res.hits).subspan(b, n), work);
+    for (const RayCounters& c : work) res.counters += c;
+  }
+  res.interrupted = interrupt && interrupt->load();
+  for (const Hit& h : res.hits) res.found += h.valid();
+  return res;
+}
+
 void writeAOVs(const AOVs& aov, const std::string& path) {
   const int W = aov.color.width, H = aov.color.height;
   const size_t npx = size_t(W) * H;

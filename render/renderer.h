@@ -104,6 +104,19 @@ IntegratorSettings integratorSettings(const Scene& scene, const RenderOptions& o
 
 RenderResult render(const Scene& scene, const TraceBackend& backend, const RenderOptions& opts);
 
+// `oblong trace`: the first hit of every ray, in batches of 2^18 rays on any backend;
+// Ctrl-C (interrupt) is taken between batches, and then `interrupted` is set and the hits
+// are incomplete. threads: as RenderOptions::threads.
+struct TraceResult {
+  std::vector<Hit> hits;
+  RayCounters counters;  // all rays' work
+  int64_t found = 0;     // rays that hit
+  double seconds = 0;    // the backend's (TraceBackend::traceHits)
+  bool interrupted = false;
+};
+TraceResult traceRays(const TraceBackend& backend, const std::vector<Ray>& rays, int threads = 0,
+                      const std::atomic<bool>* interrupt = nullptr);
+
 // Throws oblong::Error, before any work, when the host memory of the bands schedule
 // (render() on a backend that is not concurrent) does not fit: the per-pixel sums and
 // counters and at least 2^10 samples in flight.
