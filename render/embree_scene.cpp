@@ -19,6 +19,16 @@
 
 namespace oblong {
 
+// `--baseline tessellated`, registered where it is implemented: no Intersector
+// (createIntersector refuses it), EmbreeScene builds the micro-triangles instead.
+OBLONG_REGISTER_BASELINE(kTessellatedBaseline,
+                         [](ParamSet& params, const BaselineContext&) -> std::unique_ptr<Intersector> {
+                           fail(params.where(), "the {} baseline is built by the scene (EmbreeScene)",
+                                kTessellatedBaseline);
+                         },
+                         StrategyTraits{.summary = "the micro-triangles built and traced by Embree (the speed limit)",
+                                        .builtByScene = true});
+
 namespace {
 
 bool monitor(void* user, ssize_t bytes, bool) {
@@ -356,7 +366,8 @@ nlohmann::json EmbreeScene::describe() const {
 }
 
 EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
-    : embreeBytes_(std::make_shared<std::atomic<int64_t>>(0)), tessellate_(opts.tessellate) {
+    : embreeBytes_(std::make_shared<std::atomic<int64_t>>(0)),
+      tessellate_(opts.traversal.baseline == kTessellatedBaseline) {
   // A constructor that throws runs no destructor: release the device here (a bad
   // strategy name must not leak Embree's allocations).
   try {
@@ -383,14 +394,18 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
   scene_ = rtcNewScene(device_);
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);  // no cracks between shared edges
 
-  if (opts.tessellate && opts.traversal.lodPerRay)
+  if (tessellate_) {  // no parameters of its own: any is an error, as for every baseline
+    ParamSet params(opts.traversal.baselineParams, opts.traversal.where("strategies.baseline"));
+    params.checkUnused();
+  }
+  if (tessellate_ && opts.traversal.lodPerRay)
     fail(scene.path, "the pre-tessellated baseline builds one surface: a level of detail per ray (--lod cone) "
                      "needs the traversal or --baseline bruteforce (or a fixed --lod)");
   if (opts.traversal.lodPerRay) cone_ = std::make_unique<ConeLod>(scene, device_);
   // The pre-tessellation baseline is refused before anything is built when its
   // micro-triangles, their buffers and Embree's BVH would not fit.
   std::vector<std::vector<PatchSize>> sizes(scene.meshes.size());
-  if (opts.tessellate) {
+  if (tessellate_) {
     std::vector<TessellationEstimate> est;
     size_t largest = 0, displaced = 0;
     for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
@@ -427,7 +442,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
       for (size_t v = 0; v < mesh.positions.size(); ++v) g->vertices.emplace_back(vec3(mesh.world(v)), 0.0f);
       g->indices = mesh.triangles;
       g->uvs = mesh.hasUVs() ? mesh.uvs : std::vector<vec2>(mesh.positions.size(), vec2(0.0f));
-    } else if (!opts.tessellate) {
+    } else if (!tessellate_) {
       std::vector<DisplacedTriangle> tris(mesh.triangles.size());
       for (size_t ti = 0; ti < tris.size(); ++ti) tris[ti] = mesh.triangle(ti);
       g->intersector = createIntersector(opts.traversal, std::move(tris), *sm.displacement);

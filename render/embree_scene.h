@@ -2,8 +2,9 @@
 // triangles. Displaced meshes are either
 //   - user geometry over their bounding prisms, intersected by an Intersector (the
 //     traversal chosen by name, or the brute-force / fixed-step baselines), or
-//   - the pre-tessellation baseline: every micro-triangle built explicitly and traced
-//     by Embree (memory-heavy; the practical speed limit and an independent oracle).
+//   - the pre-tessellation baseline (`--baseline tessellated`): every micro-triangle
+//     built explicitly and traced by Embree (memory-heavy; the practical speed limit and
+//     an independent oracle).
 #pragma once
 
 #include "core/memory.h"
@@ -24,9 +25,19 @@ namespace oblong {
 // A ray as Embree takes it, no hit yet.
 RTCRayHit toRayHit(const Ray& r);
 
+// The pre-tessellation baseline's name (TraversalConfig::baseline): registered in
+// BaselineRegistry as built by the scene (render/embree_scene.cpp), so it is listed and
+// chosen like every baseline; EmbreeScene builds it instead of user geometry.
+inline constexpr const char* kTessellatedBaseline = "tessellated";
+
 struct AccelOptions {
-  bool tessellate = false;    // the pre-tessellation baseline instead of an Intersector
-  TraversalConfig traversal;  // strategies for the displaced meshes
+  TraversalConfig traversal;  // strategies for the displaced meshes, or a baseline
+  // The default strategies with a baseline instead, e.g. withBaseline("tessellated").
+  static AccelOptions withBaseline(const std::string& name) {
+    AccelOptions o;
+    o.traversal.baseline = name;
+    return o;
+  }
 };
 
 // The traversal configuration a scene file asks for (its "strategies" block).

@@ -76,8 +76,9 @@ double meanCameraSteps(const RenderResult& res) {
 nlohmann::json configJson(const AccelOptions& o, const Scene& scene) {
   const TraversalConfig& c = o.traversal;
   nlohmann::json j;
-  if (o.tessellate) {
-    j = {{"baseline", "tessellated"}};
+  const BaselineRegistry& reg = BaselineRegistry::instance();
+  if (!c.baseline.empty() && reg.has(c.baseline) && reg.traits(c.baseline).builtByScene) {
+    j = {{"baseline", c.baseline}};  // none of the traversal's strategies
   } else {
     j = {{"range", {{"name", c.range}, {"params", c.rangeParams}}},
          {"inverter", {{"name", c.inverter}, {"params", c.inverterParams}}},

@@ -568,7 +568,7 @@ TEST_CASE("vulkan: the asteroid renders as on the CPU", "[vulkan]") {
 TEST_CASE("vulkan: bad input gets one clear error", "[vulkan]") {
   const Scene s = loadScene(scenePath("quad_tiled.json"));
   AccelOptions tess;
-  tess.tessellate = true;
+  tess.traversal.baseline = "tessellated";
   CHECK_THROWS_WITH(vk::VulkanScene(s, tess), Catch::Contains("--baseline tessellated"));
   AccelOptions other;
   other.traversal.range = "minmax_mipmap";

@@ -45,8 +45,8 @@ struct TraversalConfig {
   // "" (the traversal above) or a registered baseline (BaselineRegistry below):
   // "bruteforce" (every micro-triangle of the prism's triangle: the oracle), "tfdm"
   // (Thonat et al. 2021's quad-tree traversal), "fixedstep" (PDM-style constant-step
-  // marching, approximate). The "tessellated" baseline is not an Intersector: it is
-  // EmbreeScene.
+  // marching, approximate), "tessellated" (registered by render/embree_scene.cpp,
+  // StrategyTraits::builtByScene: not an Intersector, EmbreeScene builds it).
   std::string baseline;
   // A level of detail per ray (Ray::lod; docs/lod.md): one intersector per level of the
   // map, each blending toward the next with the ray's fraction (createIntersector).
@@ -99,7 +99,9 @@ class Intersector {
 // Baselines are registered like strategies (core/registry.h), one line in their .cpp:
 //     OBLONG_REGISTER_BASELINE("tfdm", makeTfdm, StrategyTraits{...});
 // StrategyTraits::approximate marks a baseline that is not exact by design (fixedstep):
-// the conformance suites run every other one against the oracle.
+// the conformance suites run every other one against the oracle. A layer above may
+// register a baseline its scene builds instead of an Intersector
+// (StrategyTraits::builtByScene: `tessellated`, render/embree_scene.cpp).
 // Padding of a prism's box traced in the world at `origin` + box (a mesh's frame):
 // Embree's ray/box test for user geometry and GPU implementations' box tests are not
 // robust (t = lo·(1/d) − o·(1/d) in float, off by about |o|·2^-24 along each axis; the

@@ -208,10 +208,6 @@ struct StrategyFlags {
       c.fixedStep = float(*step);
       c.baselineParams.erase("step");
     }
-    if (c.baseline == "tessellated") {
-      o.tessellate = true;
-      c.baseline.clear();
-    }
     return o;
   }
 };
@@ -294,7 +290,8 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
     progress.phase("building on Vulkan");
     backend = vk::makeScene(scene, accelOpts);
   } else {
-    progress.phase(accelOpts.tessellate ? "pre-tessellating" : "building the acceleration structures");
+    const std::string& baseline = accelOpts.traversal.baseline;
+    progress.phase("building the acceleration structures" + (baseline.empty() ? "" : " (--baseline " + baseline + ")"));
     backend = std::make_unique<EmbreeScene>(scene, accelOpts);
   }
   progress.clear();

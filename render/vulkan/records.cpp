@@ -133,8 +133,7 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
   GpuRecords R;
   if (describe) *describe = nlohmann::json::array();
   const TraversalConfig& cfg = opts.traversal;
-  if (opts.tessellate || !cfg.baseline.empty())
-    fail("--device vulkan", "runs the traversal only, not --baseline {}", opts.tessellate ? "tessellated" : cfg.baseline);
+  if (!cfg.baseline.empty()) fail("--device vulkan", "runs the traversal only, not --baseline {}", cfg.baseline);
   if (cfg.range != "rmip" || cfg.inverter != "newton" || cfg.splitter != "midpoint2d")
     fail("--device vulkan", "runs the canonical configuration rmip+newton+midpoint2d only (asked for {}+{}+{})",
          cfg.range, cfg.inverter, cfg.splitter);
