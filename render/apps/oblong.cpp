@@ -481,6 +481,17 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
                  "full-resolution map kept\n",
                  d.lod, int(std::floor(d.lod)), d.map->width(), d.map->height(), memoryText(d.map->bytes()), d.lod,
                  d.level0->width(), d.level0->height());
+    if (!cfg.baseline.empty() && BaselineRegistry::instance().has(cfg.baseline) &&
+        BaselineRegistry::instance().traits(cfg.baseline).builtByScene) {
+      // No intersector: the scene builds the micro-triangles (EmbreeScene's estimate).
+      const TessellationEstimate e = estimateTessellation(sm.mesh, d);
+      fmt::print("    baseline '{}': no range query; {} micro-triangles: {} of vertices, uvs and indices, about {} "
+                 "of Embree BVH\n",
+                 cfg.baseline, e.microTriangles, memoryText(e.geometryBytes()), memoryText(e.bvhBytes()));
+      total += e.geometryBytes();
+      ++displaced;
+      continue;
+    }
     // Built once, as the renderer builds it; what is shown is that structure.
     const auto is = createIntersector(cfg, tris, d);
     if (const auto* t = dynamic_cast<const TraversalIntersectorBase*>(is.get())) {
