@@ -31,6 +31,11 @@ struct StrategyTraits {
   // A baseline that takes a level of detail per ray (Ray::lod; docs/lod.md): the
   // traversal does, and so must an oracle checked against it.
   bool perRayLod = false;
+  // A baseline that is no Intersector: the scene builds it instead of user geometry
+  // (`tessellated`: EmbreeScene builds the micro-triangles as Embree triangles,
+  // registered in render/embree_scene.cpp). createIntersector refuses it, and the
+  // intersectors' conformance suites leave it out (exactBaselines).
+  bool builtByScene = false;
 };
 
 template <typename Base, typename Ctx>

@@ -5,20 +5,13 @@
 #pragma once
 
 #include "core/scene.h"
+#include "render/trace_backend.h"  // RayCone
 
 #include <embree3/rtcore.h>
 
 #include <vector>
 
 namespace oblong {
-
-// A ray cone (Akenine-Möller et al., "Texture Level of Detail Strategies for Real-Time
-// Ray Tracing", Ray Tracing Gems 2019, ch. 20): the footprint's width at the ray's
-// origin and its spread angle; at distance t it is width + spread·t wide.
-struct RayCone {
-  float width = 0.0f, spread = 0.0f;
-  RayCone at(float t) const { return {width + spread * t, spread}; }
-};
 
 class ConeLod {
  public:

@@ -6,6 +6,7 @@
 #include "traversal/prism.h"
 #include "traversal/traversal.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -17,6 +18,16 @@
 #include <limits>
 
 namespace oblong {
+
+// `--baseline tessellated`, registered where it is implemented: no Intersector
+// (createIntersector refuses it), EmbreeScene builds the micro-triangles instead.
+OBLONG_REGISTER_BASELINE(kTessellatedBaseline,
+                         [](ParamSet& params, const BaselineContext&) -> std::unique_ptr<Intersector> {
+                           fail(params.where(), "the {} baseline is built by the scene (EmbreeScene)",
+                                kTessellatedBaseline);
+                         },
+                         StrategyTraits{.summary = "the micro-triangles built and traced by Embree (the speed limit)",
+                                        .builtByScene = true});
 
 namespace {
 
@@ -316,6 +327,20 @@ std::string EmbreeScene::geometryName() const {
   return traversalName_.empty() ? "embree triangles (no displaced mesh)" : traversalName_;
 }
 
+std::string EmbreeScene::geometryText() const {
+  if (tessellate_)
+    return fmt::format("pre-tessellated (baseline), {} base triangles, {} micro-triangles", baseTriangles_,
+                       microTriangles_);
+  return TraceBackend::geometryText();
+}
+
+nlohmann::json EmbreeScene::device() const {
+  return {{"api", "embree"},
+          {"version", fmt::format("{}.{}.{}", rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_VERSION_MAJOR),
+                                  rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_VERSION_MINOR),
+                                  rtcGetDeviceProperty(device_, RTC_DEVICE_PROPERTY_VERSION_PATCH))}};
+}
+
 std::vector<EmbreeScene::PrismCounts> EmbreeScene::prismCounts() const {
   std::vector<PrismCounts> out;
   for (const auto& g : geoms_)
@@ -341,7 +366,8 @@ nlohmann::json EmbreeScene::describe() const {
 }
 
 EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
-    : embreeBytes_(std::make_shared<std::atomic<int64_t>>(0)), tessellate_(opts.tessellate) {
+    : embreeBytes_(std::make_shared<std::atomic<int64_t>>(0)),
+      tessellate_(opts.traversal.baseline == kTessellatedBaseline) {
   // A constructor that throws runs no destructor: release the device here (a bad
   // strategy name must not leak Embree's allocations).
   try {
@@ -368,14 +394,18 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
   scene_ = rtcNewScene(device_);
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);  // no cracks between shared edges
 
-  if (opts.tessellate && opts.traversal.lodPerRay)
+  if (tessellate_) {  // no parameters of its own: any is an error, as for every baseline
+    ParamSet params(opts.traversal.baselineParams, opts.traversal.where("strategies.baseline"));
+    params.checkUnused();
+  }
+  if (tessellate_ && opts.traversal.lodPerRay)
     fail(scene.path, "the pre-tessellated baseline builds one surface: a level of detail per ray (--lod cone) "
                      "needs the traversal or --baseline bruteforce (or a fixed --lod)");
   if (opts.traversal.lodPerRay) cone_ = std::make_unique<ConeLod>(scene, device_);
   // The pre-tessellation baseline is refused before anything is built when its
   // micro-triangles, their buffers and Embree's BVH would not fit.
   std::vector<std::vector<PatchSize>> sizes(scene.meshes.size());
-  if (opts.tessellate) {
+  if (tessellate_) {
     std::vector<TessellationEstimate> est;
     size_t largest = 0, displaced = 0;
     for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
@@ -412,7 +442,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
       for (size_t v = 0; v < mesh.positions.size(); ++v) g->vertices.emplace_back(vec3(mesh.world(v)), 0.0f);
       g->indices = mesh.triangles;
       g->uvs = mesh.hasUVs() ? mesh.uvs : std::vector<vec2>(mesh.positions.size(), vec2(0.0f));
-    } else if (!opts.tessellate) {
+    } else if (!tessellate_) {
       std::vector<DisplacedTriangle> tris(mesh.triangles.size());
       for (size_t ti = 0; ti < tris.size(); ++ti) tris[ti] = mesh.triangle(ti);
       g->intersector = createIntersector(opts.traversal, std::move(tris), *sm.displacement);
@@ -523,6 +553,32 @@ Hit EmbreeScene::intersect(const Ray& world, RayCounters* counters) const {
   const float len = glm::length(ng);
   h.ng = len > 0 ? ng / len : vec3(0.0f);
   return h;
+}
+
+double EmbreeScene::traceHits(RayKind, std::span<const Ray> rays, std::span<Hit> hits,
+                              std::span<RayCounters> counters) const {
+  const auto start = std::chrono::steady_clock::now();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 32), [&](const tbb::blocked_range<size_t>& b) {
+    for (size_t i = b.begin(); i < b.end(); ++i) {
+      RayCounters* c = counters.empty() ? nullptr : &counters[i];
+      if (c) *c = RayCounters{};
+      hits[i] = intersect(rays[i], c);
+    }
+  });
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double EmbreeScene::traceOcclusion(RayKind, std::span<const Ray> rays, std::span<uint8_t> blocked,
+                                   std::span<RayCounters> counters) const {
+  const auto start = std::chrono::steady_clock::now();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 32), [&](const tbb::blocked_range<size_t>& b) {
+    for (size_t i = b.begin(); i < b.end(); ++i) {
+      RayCounters* c = counters.empty() ? nullptr : &counters[i];
+      if (c) *c = RayCounters{};
+      blocked[i] = occluded(rays[i], c) ? 1 : 0;
+    }
+  });
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 bool EmbreeScene::occluded(const Ray& world, RayCounters* counters) const {

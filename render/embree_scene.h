@@ -2,14 +2,16 @@
 // triangles. Displaced meshes are either
 //   - user geometry over their bounding prisms, intersected by an Intersector (the
 //     traversal chosen by name, or the brute-force / fixed-step baselines), or
-//   - the pre-tessellation baseline: every micro-triangle built explicitly and traced
-//     by Embree (memory-heavy; the practical speed limit and an independent oracle).
+//   - the pre-tessellation baseline (`--baseline tessellated`): every micro-triangle
+//     built explicitly and traced by Embree (memory-heavy; the practical speed limit and
+//     an independent oracle).
 #pragma once
 
 #include "core/memory.h"
 #include "core/scene.h"
 #include "render/cone_lod.h"
 #include "render/far_rays.h"
+#include "render/trace_backend.h"
 #include "traversal/intersector.h"
 
 #include <embree3/rtcore.h>
@@ -20,21 +22,22 @@
 
 namespace oblong {
 
-struct Hit {
-  float t = kInfinity;
-  int mesh = -1;  // index in Scene::meshes
-  int prim = -1;  // base triangle index in that mesh as loaded
-  vec2 uv{0.0f};  // texture coordinates of the hit (before tiling)
-  vec3 ng{0.0f};  // unit geometric normal of the hit (micro-)triangle
-  bool valid() const { return mesh >= 0; }
-};
-
 // A ray as Embree takes it, no hit yet.
 RTCRayHit toRayHit(const Ray& r);
 
+// The pre-tessellation baseline's name (TraversalConfig::baseline): registered in
+// BaselineRegistry as built by the scene (render/embree_scene.cpp), so it is listed and
+// chosen like every baseline; EmbreeScene builds it instead of user geometry.
+inline constexpr const char* kTessellatedBaseline = "tessellated";
+
 struct AccelOptions {
-  bool tessellate = false;    // the pre-tessellation baseline instead of an Intersector
-  TraversalConfig traversal;  // strategies for the displaced meshes
+  TraversalConfig traversal;  // strategies for the displaced meshes, or a baseline
+  // The default strategies with a baseline instead, e.g. withBaseline("tessellated").
+  static AccelOptions withBaseline(const std::string& name) {
+    AccelOptions o;
+    o.traversal.baseline = name;
+    return o;
+  }
 };
 
 // The traversal configuration a scene file asks for (its "strategies" block).
@@ -71,7 +74,9 @@ struct EmbreeUserGeometry {
   dvec3 origin{0.0};
 };
 
-class EmbreeScene {
+// The CPU's trace backend (render/trace_backend.h): batches are traced in parallel
+// (TBB) and may be traced from several threads at once.
+class EmbreeScene : public TraceBackend {
  public:
   EmbreeScene(const Scene& scene, const AccelOptions& opts);
   ~EmbreeScene();
@@ -80,14 +85,26 @@ class EmbreeScene {
 
   // First hit; per-ray traversal work is added to *counters when given.
   Hit intersect(const Ray& r, RayCounters* counters = nullptr) const;
+  bool occluded(const Ray& r, RayCounters* counters = nullptr) const;
+
+  // TraceBackend: intersect / occluded over a batch, in parallel.
+  double traceHits(RayKind kind, std::span<const Ray> rays, std::span<Hit> hits,
+                   std::span<RayCounters> counters) const override;
+  double traceOcclusion(RayKind kind, std::span<const Ray> rays, std::span<uint8_t> blocked,
+                        std::span<RayCounters> counters) const override;
+  bool concurrent() const override { return true; }
   // The level of detail of a ray with cone c under --lod cone (ConeLod::lod); 0 for a
   // scene built without TraversalConfig::lodPerRay.
-  float coneLod(const Ray& r, const RayCone& c, float bias) const { return cone_ ? cone_->lod(r, c, bias) : 0.0f; }
-  bool occluded(const Ray& r, RayCounters* counters = nullptr) const;
+  float coneLod(const Ray& r, const RayCone& c, float bias) const override {
+    return cone_ ? cone_->lod(r, c, bias) : 0.0f;
+  }
   bool tessellated() const { return tessellate_; }
-  std::string geometryName() const;
+  std::string geometryName() const override;
+  std::string geometryText() const override;
+  nlohmann::json device() const override;
+  bool hostStatistics() const override { return true; }
 
-  MemoryReport memory() const;
+  MemoryReport memory() const override;
   // Prisms of each displaced mesh traced by the traversal: built, and with projection
   // bounds (the rest are traversed box-only).
   struct PrismCounts {
@@ -97,7 +114,7 @@ class EmbreeScene {
   std::vector<PrismCounts> prismCounts() const;
   // Intersector::describe() of each displaced mesh traced as user geometry ("mesh": its
   // index): the strategies with their resolved parameters and the code path that ran.
-  nlohmann::json describe() const;
+  nlohmann::json describe() const override;
   // The map of displaced mesh `mesh` was edited in `changed` (samples, inclusive, may
   // wrap): its intersector updates what the edit reaches, then the BVH is refitted to the
   // new prism bounds. Throws oblong::Error for a pre-tessellated scene or a baseline
@@ -108,8 +125,8 @@ class EmbreeScene {
   };
   UpdateTimes update(int mesh, const SampleRange& changed);
   size_t microTriangles() const { return microTriangles_; }
-  size_t baseTriangles() const { return baseTriangles_; }
-  double buildSeconds() const { return buildSeconds_; }
+  size_t baseTriangles() const override { return baseTriangles_; }
+  double buildSeconds() const override { return buildSeconds_; }
 
  private:
   struct Geometry {

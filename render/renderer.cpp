@@ -1,6 +1,7 @@
 #include "render/renderer.h"
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "render/camera.h"
 #include "render/output.h"
 #include "render/sampling.h"
@@ -11,119 +12,12 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
-#include <unistd.h>
-
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
+#include <memory>
 #include <mutex>
-#include <thread>
 
 namespace oblong {
-
-namespace {
-
-struct Tracer {
-  const Scene& scene;
-  const EmbreeScene& accel;
-  const RenderOptions& opts;
-  float aoRadius;
-  // Smooth normals: every mesh's triangles, prepared once (indexed by Hit::prim).
-  std::vector<std::vector<DisplacedTriangle>> triangles;
-
-  // Under --lod cone, a camera ray's λ from its cone (EmbreeScene::coneLod); otherwise
-  // none. Rays leaving a hit (shadow, ambient occlusion, bounces) keep the λ of the ray
-  // that found it: at any other λ the surface they start on is another one, up to the
-  // height range away, and they would hit it at once (docs/lod.md, measured).
-  void setLod(Ray& r, const RayCone& c) const {
-    if (scene.lodCone) r.lod = accel.coneLod(r, c, scene.lodBias);
-  }
-
-  void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
-    shadingNormals(scene, triangles, opts.normals, r, h, ngf, ns);
-  }
-  static vec3 spawn(const vec3& p, const vec3& ngf, const vec3& d) { return spawnOrigin(p, ngf, d); }
-
-  // Direct light from every light at p (geometric normal ng and shading normal n facing
-  // the incoming ray).
-  vec3 direct(const vec3& p, const vec3& ng, const vec3& n, const vec3& albedo, float lod, RayCounters& c,
-              int64_t& rays) const {
-    vec3 L(0.0f);
-    for (const Light& light : scene.lights) {
-      vec3 wi;
-      float dist = kInfinity, falloff = 1.0f;
-      if (light.type == Light::Type::Directional) {
-        wi = -glm::normalize(light.direction);
-      } else {
-        wi = light.position - p;
-        dist = glm::length(wi);
-        if (!(dist > 0)) continue;
-        wi /= dist;
-        falloff = 1.0f / (dist * dist);
-      }
-      const float cosTheta = glm::dot(n, wi);
-      if (cosTheta <= 0 || glm::dot(ng, wi) <= 0) continue;  // the surface itself shadows p
-      ++rays;
-      const Ray s{p + spawnEps(p) * ng, wi, 0.0f, dist * (1.0f - 1e-4f), lod};
-      if (!accel.occluded(s, &c)) L += albedo * light.intensity * (cosTheta * falloff / kPi);
-    }
-    return L;
-  }
-
-  // Radiance along a camera ray whose first hit is h; every ray of the path keeps the
-  // camera ray's level of detail (setLod).
-  vec3 shade(const Ray& r, const Hit& h, Rng& rng, RayCounters& c, int64_t& rays) const {
-    if (!h.valid()) return opts.integrator == Integrator::Path ? opts.sky : vec3(0.0f);
-    vec3 ng, n;
-    normals(r, h, ng, n);
-    if (opts.integrator == Integrator::Primary) return 0.5f * n + 0.5f;
-    const vec3 p = r.at(h.t);
-    if (opts.integrator == Integrator::AO) {
-      const vec3 d = cosineSample(n, rng);
-      if (glm::dot(d, ng) <= 0) return vec3(0.0f);  // below the geometric surface: occluded
-      ++rays;
-      const Ray a{spawn(p, ng, d), d, 0.0f, aoRadius, r.lod};
-      return vec3(accel.occluded(a, &c) ? 0.0f : 1.0f);
-    }
-    // Path tracing: diffuse surfaces, NEE at every vertex, sky on escape.
-    vec3 L(0.0f), beta(1.0f);
-    vec3 pos = p, nrm = n, geo = ng;
-    int mesh = h.mesh;
-    for (int depth = 0;; ++depth) {
-      const vec3 albedo = scene.meshes[size_t(mesh)].albedo;
-      L += beta * direct(pos, geo, nrm, albedo, r.lod, c, rays);
-      if (depth + 1 >= opts.maxDepth) break;
-      beta *= albedo;  // cosine-weighted sampling of a Lambertian BRDF
-      if (depth >= 3) {
-        const float q = std::min(0.95f, std::max({beta.x, beta.y, beta.z}));
-        if (rng.uniform() >= q) break;
-        beta /= q;
-      }
-      const vec3 d = cosineSample(nrm, rng);
-      if (glm::dot(d, geo) <= 0) break;  // into the surface (smooth normals only): absorbed
-      const Ray b{spawn(pos, geo, d), d, 0.0f, kInfinity, r.lod};
-      ++rays;
-      const Hit bh = accel.intersect(b, &c);
-      if (!bh.valid()) {
-        L += beta * opts.sky;
-        break;
-      }
-      normals(b, bh, geo, nrm);
-      pos = b.at(bh.t);
-      mesh = bh.mesh;
-    }
-    return L;
-  }
-};
-
-}  // namespace
-
-Integrator parseIntegrator(const std::string& name) {
-  if (name == "primary") return Integrator::Primary;
-  if (name == "ao") return Integrator::AO;
-  if (name == "path") return Integrator::Path;
-  fail("--integrator", "unknown integrator '{}' (primary | ao | path)", name);
-}
 
 ShadingNormals parseShadingNormals(const std::string& name) {
   if (name == "micro") return ShadingNormals::Micro;
@@ -165,8 +59,7 @@ vec3 smoothDisplacedNormal(const DisplacedTriangle& T, const Displacement* d, fl
 
 void shadingNormals(const Scene& scene, const std::vector<std::vector<DisplacedTriangle>>& triangles,
                     ShadingNormals kind, const Ray& r, const Hit& h, vec3& ngf, vec3& ns) {
-  ngf = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng;
-  ns = ngf;
+  microNormals(r, h, ngf, ns);
   if (kind != ShadingNormals::Smooth) return;
   const SceneMesh& sm = scene.meshes[size_t(h.mesh)];
   const DisplacedTriangle& T = triangles[size_t(h.mesh)][size_t(h.prim)];
@@ -177,15 +70,6 @@ void shadingNormals(const Scene& scene, const std::vector<std::vector<DisplacedT
   const vec3 n = smoothDisplacedNormal(T, sm.displacement ? &*sm.displacement : nullptr, b.x, b.y);
   if (n == vec3(0.0f)) return;
   ns = glm::dot(n, ngf) < 0 ? -n : n;
-}
-
-const char* integratorName(Integrator i) {
-  switch (i) {
-    case Integrator::Primary: return "primary";
-    case Integrator::AO: return "ao";
-    case Integrator::Path: return "path";
-  }
-  return "?";
 }
 
 void AOVs::allocate(ivec2 size) {
@@ -199,83 +83,241 @@ void AOVs::allocate(ivec2 size) {
   cellsMarched.assign(npx, 0.0f);
 }
 
-RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts) {
+IntegratorSettings integratorSettings(const Scene& scene, const RenderOptions& opts) {
+  IntegratorSettings set;
+  set.integrator = opts.integrator;
+  set.maxDepth = opts.maxDepth;
+  set.sky = opts.sky;
+  set.aoRadius = opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene);
+  set.lights = scene.lights;
+  for (const SceneMesh& sm : scene.meshes) set.albedo.push_back(sm.albedo);
+  return set;
+}
+
+namespace {
+
+// Bands: host memory of one sample in flight (its camera ray, stream, path, hit,
+// counters, value, and its share of the shadow and bounce queues: a few hundred bytes
+// with one light, not measured here; 1 KiB leaves room for more lights) and of one pixel
+// (the samples' sum and the camera rays' counters).
+constexpr size_t kBytesPerSample = 1024;
+constexpr size_t kBytesPerPixel = sizeof(vec3) + sizeof(RayCounters);
+// Samples traced per band: large enough to fill a GPU, small enough to bound memory
+// (~256 MiB) and to answer Ctrl-C within one band.
+constexpr size_t kBandSamples = size_t(1) << 18;
+constexpr size_t kMinBandSamples = size_t(1) << 10;
+// Tiles: samples per batch (a 16x16 tile at 16 spp), bounding the memory of a tile at
+// any --spp.
+constexpr size_t kTileBatchSamples = 4096;
+
+// Samples per band: the requested (or default) band, smaller where the memory budget
+// left after the per-pixel buffers is smaller, never below kMinBandSamples.
+size_t bandSamples(const RenderOptions& opts) {
+  const size_t npx = size_t(std::max(opts.size.x, 0)) * size_t(std::max(opts.size.y, 0));
+  const size_t ns = npx * size_t(std::max(opts.spp, 1));
+  const size_t budget = structureBudgetBytes(), pixels = npx * kBytesPerPixel;
+  const size_t fit = budget > pixels ? (budget - pixels) / kBytesPerSample : 0;
+  const size_t asked = opts.bandSamples > 0 ? opts.bandSamples : kBandSamples;
+  return std::max<size_t>(1, std::min({ns, asked, std::max(fit, kMinBandSamples)}));
+}
+
+// What the camera rays and the integrator's passes add up to, per tile or band.
+struct Totals {
+  int64_t hits = 0, secondaryRays = 0, lodZero = 0;
+  double lodSum = 0, seconds = 0;
+  RayCounters counters;
+  Totals& operator+=(const Totals& o) {
+    hits += o.hits, secondaryRays += o.secondaryRays, lodZero += o.lodZero;
+    lodSum += o.lodSum, seconds += o.seconds;
+    counters += o.counters;
+    return *this;
+  }
+};
+
+// What both schedules share: the camera, the integrator, the per-pixel sums.
+struct Film {
+  const Scene& scene;
+  const TraceBackend& backend;
+  const RenderOptions& opts;
+  PinholeCamera cam;
+  RayCone camCone;
+  IntegratorSettings settings;
+  std::vector<std::vector<DisplacedTriangle>> triangles;  // smooth normals: every mesh's
+  AOVs& aov;
+
+  void normals(const Ray& r, const Hit& h, vec3& ngf, vec3& ns) const {
+    shadingNormals(scene, triangles, opts.normals, r, h, ngf, ns);
+  }
+
+  // Samples [k0, k1) of a list of pixels (sample k: sample k % spp of pixel
+  // pixels[k / spp], or of pixel k / spp when `pixels` is empty): traced, their values
+  // and camera counters added to sum[k / spp] and work[k / spp], in sample order; sample
+  // 0's depth and shading normal into the AOVs.
+  void trace(const std::vector<size_t>& pixels, size_t k0, size_t k1, vec3* sum, RayCounters* work,
+             Totals& t) const {
+    const size_t spp = size_t(opts.spp), nb = k1 - k0;
+    SampleBatch b;
+    b.camera.resize(nb);
+    b.rng.resize(nb);
+    for (size_t j = 0; j < nb; ++j) {
+      const size_t slot = (k0 + j) / spp, px = pixels.empty() ? slot : pixels[slot];
+      Ray& r = b.camera[j];
+      r = cameraSample(cam, opts.size.x, opts.seed, px, int((k0 + j) % spp), b.rng[j]);
+      // Under --lod cone, a camera ray's λ from its cone; every ray of its path keeps it.
+      if (scene.lodCone) r.lod = backend.coneLod(r, camCone, scene.lodBias);
+      t.lodSum += std::max(r.lod, 0.0f), t.lodZero += r.lod <= 0.0f;
+    }
+    integrate(backend, settings, [this](const Ray& r, const Hit& h, vec3& ngf, vec3& ns) { normals(r, h, ngf, ns); },
+              b);
+    for (size_t j = 0; j < nb; ++j) {
+      const size_t k = k0 + j, slot = k / spp, px = pixels.empty() ? slot : pixels[slot];
+      sum[slot] += b.value[j];
+      work[slot] += b.work[j];
+      if (k % spp == 0 && b.hit[j].valid()) {
+        aov.depth[px] = b.hit[j].t;
+        aov.normal[px] = b.normal[j];
+      }
+    }
+    t.hits += b.hits, t.secondaryRays += b.secondaryRays, t.seconds += b.seconds;
+    t.counters += b.counters;
+  }
+
+  // Pixel px's colour (the mean of its samples, no filter) and its camera rays' counters
+  // (means over the samples).
+  void finish(size_t px, const vec3& sum, const RayCounters& work) const {
+    const float inv = 1.0f / float(opts.spp);
+    aov.color.pixels[px] = sum / float(opts.spp);
+    aov.steps[px] = float(work.steps()) * inv;
+    aov.rangeQueries[px] = float(work.rangeQueries) * inv;
+    aov.inversions[px] = float(work.inversions) * inv;
+    aov.cellsMarched[px] = float(work.cellsMarched) * inv;
+  }
+};
+
+// 16x16 tiles in parallel (TBB), each in batches of kTileBatchSamples; a tile not yet
+// started when Ctrl-C comes is skipped.
+void renderTiles(const Film& film, RenderResult& res) {
+  const RenderOptions& opts = film.opts;
+  const int W = opts.size.x, H = opts.size.y;
+  std::mutex totalsMutex;
+  Totals total;
+  std::atomic<int64_t> pixelsDone{0};
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, H, 16, 0, W, 16), [&](const auto& tile) {
+    if (opts.interrupt && opts.interrupt->load(std::memory_order_relaxed)) return;
+    std::vector<size_t> pixels;
+    for (int y = tile.rows().begin(); y < tile.rows().end(); ++y)
+      for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) pixels.push_back(size_t(y) * size_t(W) + size_t(x));
+    std::vector<vec3> sum(pixels.size(), vec3(0.0f));
+    std::vector<RayCounters> work(pixels.size());
+    Totals t;
+    const size_t ns = pixels.size() * size_t(opts.spp);
+    for (size_t k = 0; k < ns; k += kTileBatchSamples)
+      film.trace(pixels, k, std::min(ns, k + kTileBatchSamples), sum.data(), work.data(), t);
+    for (size_t i = 0; i < pixels.size(); ++i) film.finish(pixels[i], sum[i], work[i]);
+    if (opts.progress) opts.progress->add(int64_t(pixels.size()));
+    {
+      std::lock_guard<std::mutex> lock(totalsMutex);
+      total += t;
+    }
+    pixelsDone += int64_t(pixels.size());
+  });
+  res.pixelsDone = pixelsDone;
+  res.primaryRays = res.pixelsDone * opts.spp;
+  res.secondaryRays = total.secondaryRays, res.hits = total.hits, res.counters = total.counters;
+  res.cameraLodSum = total.lodSum, res.cameraLodZero = total.lodZero;
+}
+
+// The image's samples in order (sample k: pixel k / spp, sample k % spp), in bands, one
+// after the other; Ctrl-C is taken between bands: the pixels whose samples were all
+// traced are kept. Each sample's value depends on its own stream only, so the image does
+// not depend on the banding.
+void renderBands(const Film& film, RenderResult& res) {
+  const RenderOptions& opts = film.opts;
+  const size_t spp = size_t(opts.spp), npx = size_t(opts.size.x) * size_t(opts.size.y), ns = npx * spp;
+  checkBandsFit(opts);
+  const size_t band = bandSamples(opts);
+  std::vector<vec3> pixelSum(npx, vec3(0.0f));  // the samples' values, summed in order
+  std::vector<RayCounters> pixelWork(npx);       // the camera rays' counters
+  Totals total;
+  size_t done = 0;
+  while (done < ns) {
+    if (opts.interrupt && opts.interrupt->load()) {
+      res.partial = true;
+      break;
+    }
+    const size_t next = std::min(ns, done + band);
+    film.trace({}, done, next, pixelSum.data(), pixelWork.data(), total);
+    if (opts.progress) opts.progress->add(int64_t(next / spp) - int64_t(done / spp));
+    done = next;
+  }
+  res.pixelsDone = int64_t(done / spp);
+  for (size_t px = 0; px < size_t(res.pixelsDone); ++px) film.finish(px, pixelSum[px], pixelWork[px]);
+  // The rest stays black, without depth or normal.
+  for (size_t px = size_t(res.pixelsDone); px < npx; ++px) film.aov.depth[px] = kInfinity, film.aov.normal[px] = vec3(0.0f);
+  res.primaryRays = int64_t(done);
+  res.secondaryRays = total.secondaryRays, res.hits = total.hits, res.counters = total.counters;
+  res.cameraLodSum = total.lodSum, res.cameraLodZero = total.lodZero;
+  res.seconds = total.seconds;
+  res.tracingOnly = true;
+}
+
+}  // namespace
+
+void checkBandsFit(const RenderOptions& opts) {
+  const size_t npx = size_t(std::max(opts.size.x, 0)) * size_t(std::max(opts.size.y, 0));
+  const size_t band = std::min(bandSamples(opts), kMinBandSamples);
+  checkFits("--device vulkan", "rendering on Vulkan", npx * kBytesPerPixel + band * kBytesPerSample,
+            "choose a smaller --size",
+            fmt::format("{} pixels at {} bytes and at least {} samples in flight at {} bytes", npx, kBytesPerPixel,
+                        band, kBytesPerSample));
+}
+
+RenderResult render(const Scene& scene, const TraceBackend& backend, const RenderOptions& opts) {
   if (opts.size.x <= 0 || opts.size.y <= 0) fail("render", "image size must be positive");
   if (opts.spp <= 0) fail("--spp", "must be >= 1, got {}", opts.spp);
   RenderResult res;
-  const int W = opts.size.x, H = opts.size.y;
-  const size_t npx = size_t(W) * H;
-  AOVs& aov = res.aov;
-  aov.allocate(opts.size);
-
+  res.aov.allocate(opts.size);
   const PinholeCamera cam(scene.camera, opts.size);
-  const RayCone camCone{0.0f, cam.pixelSpread()};
-  Tracer tracer{scene, accel, opts, opts.aoRadius > 0 ? opts.aoRadius : 0.25f * sceneDiagonal(scene), {}};
+  Film film{scene, backend, opts, cam, RayCone{0.0f, cam.pixelSpread()}, integratorSettings(scene, opts), {}, res.aov};
   if (opts.normals == ShadingNormals::Smooth)
     for (const SceneMesh& sm : scene.meshes) {
-      std::vector<DisplacedTriangle>& tris = tracer.triangles.emplace_back(sm.mesh.triangles.size());
+      std::vector<DisplacedTriangle>& tris = film.triangles.emplace_back(sm.mesh.triangles.size());
       for (size_t i = 0; i < tris.size(); ++i) tris[i] = sm.mesh.triangle(i);
     }
-  std::atomic<int64_t> secondary{0}, hits{0};
-  std::mutex countersMutex;
   std::unique_ptr<tbb::global_control> limit;
   if (opts.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, opts.threads);
-  std::atomic<int64_t> pixelsDone{0};
   const auto start = std::chrono::steady_clock::now();
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, H, 16, 0, W, 16), [&](const auto& tile) {
-    if (opts.interrupt && opts.interrupt->load(std::memory_order_relaxed)) return;
-    int64_t localRays = 0, localHits = 0, localLodZero = 0;
-    double localLod = 0;
-    RayCounters tileCounters;
-    for (int y = tile.rows().begin(); y < tile.rows().end(); ++y) {
-      for (int x = tile.cols().begin(); x < tile.cols().end(); ++x) {
-        const size_t px = size_t(y) * W + x;
-        vec3 sum(0.0f);
-        RayCounters primary;
-        for (int s = 0; s < opts.spp; ++s) {
-          Rng rng(opts.seed * 0x9E3779B97F4A7C15ULL + px, uint64_t(s));
-          // Sample 0 goes through the pixel centre (AOVs); the others are jittered.
-          const float jx = s == 0 ? 0.5f : rng.uniform(), jy = s == 0 ? 0.5f : rng.uniform();
-          Ray r = cam.generate(x + jx, y + jy);
-          tracer.setLod(r, camCone);
-          localLod += std::max(r.lod, 0.0f), localLodZero += r.lod <= 0.0f;
-          RayCounters camera;
-          const Hit h = accel.intersect(r, &camera);
-          primary += camera;
-          tileCounters += camera;
-          if (s == 0 && h.valid()) {
-            vec3 ng;
-            aov.depth[px] = h.t;
-            tracer.normals(r, h, ng, aov.normal[px]);
-          }
-          localHits += h.valid();
-          sum += tracer.shade(r, h, rng, tileCounters, localRays);
-        }
-        aov.color.at(x, y) = sum / float(opts.spp);
-        const float inv = 1.0f / float(opts.spp);
-        aov.steps[px] = float(primary.steps()) * inv;
-        aov.rangeQueries[px] = float(primary.rangeQueries) * inv;
-        aov.inversions[px] = float(primary.inversions) * inv;
-        aov.cellsMarched[px] = float(primary.cellsMarched) * inv;
-      }
-      if (opts.progress) opts.progress->add(int64_t(tile.cols().size()));
-    }
-    {
-      std::lock_guard<std::mutex> lock(countersMutex);
-      res.counters += tileCounters;
-      res.cameraLodSum += localLod, res.cameraLodZero += localLodZero;
-    }
-    secondary += localRays;
-    hits += localHits;
-    pixelsDone += int64_t(tile.rows().size()) * int64_t(tile.cols().size());
-  });
-  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  res.pixelsDone = pixelsDone;
-  res.partial = res.pixelsDone < int64_t(npx);
-  res.primaryRays = res.pixelsDone * opts.spp;
-  res.secondaryRays = secondary;
-  res.hits = hits;
+  if (backend.concurrent()) {
+    renderTiles(film, res);
+    res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    res.partial = res.pixelsDone < int64_t(opts.size.x) * opts.size.y;
+  } else {
+    renderBands(film, res);
+  }
+  return res;
+}
+
+TraceResult traceRays(const TraceBackend& backend, const std::vector<Ray>& rays, int threads,
+                      const std::atomic<bool>* interrupt) {
+  // In batches, so that Ctrl-C is answered within one batch and a device's staging
+  // memory stays bounded; each ray's answer does not depend on its batch.
+  constexpr size_t kBatch = size_t(1) << 18;
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+  TraceResult res;
+  res.hits.resize(rays.size());
+  std::vector<RayCounters> work;
+  for (size_t b = 0; b < rays.size(); b += kBatch) {
+    if (interrupt && interrupt->load()) break;
+    const size_t n = std::min(kBatch, rays.size() - b);
+    work.assign(n, RayCounters{});
+    res.seconds += backend.traceHits(RayKind::Camera, std::span<const Ray>(rays).subspan(b, n),
+                                     std::span<Hit>(res.hits).subspan(b, n), work);
+    for (const RayCounters& c : work) res.counters += c;
+  }
+  res.interrupted = interrupt && interrupt->load();
+  for (const Hit& h : res.hits) res.found += h.valid();
   return res;
 }
 

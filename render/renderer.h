@@ -1,23 +1,28 @@
-// The renderer over an EmbreeScene: three integrators, per-pixel AOVs, multi-threaded
-// over 16x16 image tiles with TBB, deterministic for a given seed whatever the thread
-// count (each pixel sample draws from its own hashed random stream).
+// The renderer: the integrator (render/integrator.h) over a whole image, on any trace
+// backend (render/trace_backend.h), with per-pixel AOVs. Deterministic for a given seed
+// whatever the thread count or the batching: each pixel sample draws from its own
+// random stream, and its value does not depend on the batch it is traced in.
 //
-//   primary  the shading normal of the first hit (0.5·n + 0.5), no secondary rays
-//   ao       ambient occlusion: one cosine-weighted ray per sample, radius aoRadius
-//   path     a small diffuse path tracer with next-event estimation towards the scene's
-//            point and directional lights, a constant sky, Russian roulette after depth 3
+// Two schedules, by what the backend allows (TraceBackend::concurrent):
+//   tiles  (EmbreeScene, the CPU) 16x16 image tiles rendered in parallel with TBB, each
+//          traced in batches of at most 4096 samples;
+//   bands  (VulkanScene, one GPU queue) the image's samples in order, in bands of up to
+//          2^18 samples (RenderOptions::bandSamples), one after the other.
+// Ctrl-C (RenderOptions::interrupt) is taken between tiles or bands.
 //
 // Shading normals (--normals): `micro`, the geometric normal of the hit micro-triangle
 // (the micro-geometry is flat, docs/design.md §1; shows every texel cell and base edge), or
 // `smooth`, the smoothed displaced normal of the PDM paper §5.1 (smoothDisplacedNormal).
-// Secondary rays start at p + ε·n_g on the side of the geometric normal n_g they leave
-// by, ε = 1e-4·max(1, |p|) (docs/design.md invariant 5); with smooth normals, light and bounce
-// directions below the geometric surface are dropped (no light through the surface).
+// With smooth normals, light and bounce directions below the geometric surface are
+// dropped (no light through the surface).
 #pragma once
 
-#include "render/embree_scene.h"
+#include "core/scene.h"
+#include "core/triangle.h"
 #include "render/image.h"
+#include "render/integrator.h"
 #include "render/progress.h"
+#include "render/trace_backend.h"
 
 #include <atomic>
 #include <cstdint>
@@ -25,10 +30,6 @@
 #include <vector>
 
 namespace oblong {
-
-enum class Integrator { Primary, AO, Path };
-Integrator parseIntegrator(const std::string& name);  // throws oblong::Error
-const char* integratorName(Integrator i);
 
 enum class ShadingNormals { Micro, Smooth };
 ShadingNormals parseShadingNormals(const std::string& name);  // throws oblong::Error
@@ -46,7 +47,7 @@ vec3 smoothDisplacedNormal(const DisplacedTriangle& T, const Displacement* d, fl
 
 // The geometric normal of hit h facing ray r (ngf) and the shading normal (ns, same
 // side) of the chosen kind; `triangles` (every mesh's, indexed by Hit::prim) is needed
-// for smooth normals only. Shared by the CPU and Vulkan renderers.
+// for smooth normals only. The renderer's Normals for integrate().
 void shadingNormals(const Scene& scene, const std::vector<std::vector<DisplacedTriangle>>& triangles,
                     ShadingNormals kind, const Ray& r, const Hit& h, vec3& ngf, vec3& ns);
 // ∇_uv h of the bilinear height h(uv) (docs/design.md §1), inside the cell that holds uv.
@@ -66,8 +67,8 @@ struct RenderOptions {
   // Set (by a SIGINT handler) to stop: tiles not yet started are skipped, the ones in
   // flight finish, and the result is marked partial.
   const std::atomic<bool>* interrupt = nullptr;
-  // --device vulkan: camera samples traced per band (0: the default, 2^18); the image
-  // does not depend on it.
+  // Bands (a backend that is not concurrent, e.g. --device vulkan): camera samples traced
+  // per band (0: the default, 2^18); the image does not depend on it.
   size_t bandSamples = 0;
 };
 
@@ -84,8 +85,11 @@ struct AOVs {
 
 struct RenderResult {
   AOVs aov;
+  // Tiles: the render's wall clock. Bands: the backend's own tracing seconds (a GPU's
+  // dispatches, without the host's shading), and tracingOnly is set.
   double seconds = 0;
-  int64_t primaryRays = 0, secondaryRays = 0, hits = 0;
+  bool tracingOnly = false;
+  int64_t primaryRays = 0, secondaryRays = 0, hits = 0;  // camera rays, the others, camera rays that hit
   RayCounters counters;  // traversal work of all rays (camera and secondary)
   int64_t pixelsDone = 0;  // < width x height when interrupted (the rest stays black)
   // Under --lod cone: the camera rays' λ from the rule (before each map's clamp), summed,
@@ -95,7 +99,28 @@ struct RenderResult {
   bool partial = false;
 };
 
-RenderResult render(const Scene& scene, const EmbreeScene& accel, const RenderOptions& opts);
+// The integrator's settings for this scene and these options.
+IntegratorSettings integratorSettings(const Scene& scene, const RenderOptions& opts);
+
+RenderResult render(const Scene& scene, const TraceBackend& backend, const RenderOptions& opts);
+
+// `oblong trace`: the first hit of every ray, in batches of 2^18 rays on any backend;
+// Ctrl-C (interrupt) is taken between batches, and then `interrupted` is set and the hits
+// are incomplete. threads: as RenderOptions::threads.
+struct TraceResult {
+  std::vector<Hit> hits;
+  RayCounters counters;  // all rays' work
+  int64_t found = 0;     // rays that hit
+  double seconds = 0;    // the backend's (TraceBackend::traceHits)
+  bool interrupted = false;
+};
+TraceResult traceRays(const TraceBackend& backend, const std::vector<Ray>& rays, int threads = 0,
+                      const std::atomic<bool>* interrupt = nullptr);
+
+// Throws oblong::Error, before any work, when the host memory of the bands schedule
+// (render() on a backend that is not concurrent) does not fit: the per-pixel sums and
+// counters and at least 2^10 samples in flight.
+void checkBandsFit(const RenderOptions& opts);
 
 // Colour, depth, normal and the per-pixel counters as one multi-channel EXR.
 void writeAOVs(const AOVs& aov, const std::string& path);

@@ -1,6 +1,6 @@
-// Sampling helpers shared by the CPU renderer (render/renderer.cpp) and the Vulkan
-// wavefront renderer (render/vulkan/vulkan_render.cpp): both must draw the same random
-// numbers and spawn the same rays, so that their images can be compared bit for bit.
+// Sampling helpers of the integrator (render/integrator.h), which every device renders
+// with: random streams, cosine sampling, ray spawning. Header-only (oblong_vkbench
+// compiles it).
 #pragma once
 
 #include "core/math.h"
@@ -18,6 +18,7 @@ inline constexpr float kPi = 3.14159265358979f;
 // PCG32 (O'Neill 2014), seeded per pixel sample: deterministic whatever the schedule.
 struct Rng {
   uint64_t state, inc;
+  Rng() : Rng(0, 0) {}
   Rng(uint64_t seed, uint64_t stream) : state(0), inc((stream << 1u) | 1u) {
     next();
     state += seed;

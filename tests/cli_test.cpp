@@ -120,6 +120,17 @@ TEST_CASE("oblong info: wrap corners only when some query crosses the map border
   const Run corners = run("info " + (dir / "tiled_corners.json").string());
   INFO(corners.out << corners.err);
   CHECK(corners.out.find("wrap     : corners wrapping around the map border stored") != std::string::npos);
+  // A scene whose strategies choose the tessellated baseline (built by the scene, no
+  // intersector): info says what it builds, the render builds it.
+  std::ofstream(dir / "tessellated.json")
+      << R"({"meshes": [{"shape": {"type": "plane", "size": 2, "uv": [0.25, 0.25, 0.75, 0.75]},
+             "displacement": {"map": "map.png", "scale": 0.1, "tiling": 1}}],
+             "strategies": {"baseline": {"name": "tessellated"}}})";
+  const Run tess = run("info " + (dir / "tessellated.json").string());
+  INFO(tess.out << tess.err);
+  CHECK(tess.status == 0);
+  CHECK(tess.out.find("baseline 'tessellated': no range query; ") != std::string::npos);
+  CHECK(tess.out.find(" micro-triangles") != std::string::npos);
 }
 
 TEST_CASE("bad command-line input gives one clear error line", "[cli][bad_input]") {
@@ -265,8 +276,9 @@ TEST_CASE("oblong trace --baseline tfdm matches both oracles, and a scene file c
                 "displacement": {"map": ")" OBLONG_SOURCE_DIR R"(/scenes/maps/cobbles_256.png", "scale": 0.05}}]})";
   r = run("trace " + badScene + " --rays " + csv + " -o " + (dir / "y.csv").string());
   CHECK(r.status == 1);
-  CHECK_THAT(r.err, Catch::Contains("strategies.baseline") && Catch::Contains("'tfdmm'") && Catch::Contains("tfdm;") &&
-                        Catch::Contains(badScene));
+  // The known ones listed, tessellated (registered by render/) among them.
+  CHECK_THAT(r.err, Catch::Contains("strategies.baseline") && Catch::Contains("'tfdmm'") &&
+                        Catch::Contains("tessellated, tfdm)") && Catch::Contains(badScene));
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
 }
 

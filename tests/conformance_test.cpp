@@ -220,7 +220,7 @@ std::string label(const TraversalConfig& c) {
 }
 
 void runConformance(const Scene& s, int count) {
-  const EmbreeScene tess(s, AccelOptions{.tessellate = true, .traversal = {}});
+  const EmbreeScene tess(s, AccelOptions::withBaseline("tessellated"));
   AccelOptions bf;
   bf.traversal.baseline = "bruteforce";
   const EmbreeScene brute(s, bf);
@@ -239,7 +239,7 @@ void runConformance(const Scene& s, int count) {
     CHECK(m.count == 0);
   }
   for (const auto& [cfg, slow] : test::conformanceConfigs()) {
-    const EmbreeScene test(s, AccelOptions{.tessellate = false, .traversal = cfg});
+    const EmbreeScene test(s, AccelOptions{.traversal = cfg});
     for (size_t k = 0; k < families.size(); ++k) {
       const auto& f = families[k];
       // Slow references (ceres) on every kSlowStride-th ray.
@@ -275,7 +275,7 @@ Scene translated(Scene s, const dvec3& shift) {
 // (the translated ray), then moved back exactly (the untranslated ray). Both scenes are
 // also checked against the brute force on the translated rays.
 void runTranslation(const Scene& s, int count) {
-  const EmbreeScene tess(s, AccelOptions{.tessellate = true, .traversal = {}});
+  const EmbreeScene tess(s, AccelOptions::withBaseline("tessellated"));
   const auto families = rayFamilies(s, tess, count, 4321);
   const EmbreeScene near0(s, AccelOptions{});
   for (const double d : {1e2, 1e4, 1e6}) {
@@ -376,7 +376,7 @@ TEST_CASE("conformance: every combination agrees with the oracles on elongated a
   {  // The flat map is the plane y = 0: every oracle's t is the plane's, to float rounding.
     AccelOptions bf;
     bf.traversal.baseline = "bruteforce";
-    const EmbreeScene brute(flat, bf), tess(flat, AccelOptions{.tessellate = true, .traversal = {}}),
+    const EmbreeScene brute(flat, bf), tess(flat, AccelOptions::withBaseline("tessellated")),
         canonical(flat, AccelOptions{});
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> U(-1.0f, 1.0f);
@@ -430,7 +430,7 @@ namespace {
 void runPerRayLod(Scene s, int count) {
   const float K = float(lodLevels(*s.meshes[0].displacement->map));
   const std::vector<float> lambdas{-1.0f, 0.0f, 0.25f, 0.5f, 1.0f, 1.75f, 2.25f, K - 0.5f, K, K + 0.5f};
-  const EmbreeScene tess(s, AccelOptions{.tessellate = true, .traversal = {}});
+  const EmbreeScene tess(s, AccelOptions::withBaseline("tessellated"));
   auto families = rayFamilies(s, tess, count, 777);
   std::mt19937 rng(11);
   std::vector<std::vector<size_t>> which(families.size());
@@ -484,7 +484,7 @@ void runPerRayLod(Scene s, int count) {
     // Baselines with one surface for every ray refuse a per-ray λ (tested in bad_input).
     if (!cfg.baseline.empty() && !BaselineRegistry::instance().traits(cfg.baseline).perRayLod) continue;
     cfg.lodPerRay = true;
-    const EmbreeScene test(s, AccelOptions{.tessellate = false, .traversal = cfg});
+    const EmbreeScene test(s, AccelOptions{.traversal = cfg});
     for (size_t k = 0; k < families.size(); ++k) {
       std::vector<Ray> rays;
       std::vector<Hit> expect;
@@ -673,7 +673,7 @@ TEST_CASE("conformance (large): millions of rays", "[conformance][.large]") {
 
 TEST_CASE("fixedstep baseline is approximate but finds most hits", "[conformance][fixedstep]") {
   const Scene s = tiledQuadScene();
-  const EmbreeScene tess(s, AccelOptions{.tessellate = true, .traversal = {}});
+  const EmbreeScene tess(s, AccelOptions::withBaseline("tessellated"));
   AccelOptions fs;
   fs.traversal.baseline = "fixedstep";
   const EmbreeScene fixed(s, fs);

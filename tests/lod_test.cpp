@@ -143,7 +143,7 @@ TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot 
   Scene s = closedTorus();
   for (const float lod : {0.5f, 1.75f, 3.25f}) {
     setLod(s, lod, "test");
-    AccelOptions tessellated{.tessellate = true, .traversal = {}}, canonical, brute;
+    AccelOptions tessellated = AccelOptions::withBaseline("tessellated"), canonical, brute;
     brute.traversal.baseline = "bruteforce";
     for (const AccelOptions& opts : {tessellated, canonical, brute}) {
       EmbreeScene accel(s, opts);

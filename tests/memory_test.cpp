@@ -241,7 +241,7 @@ TEST_CASE("the tessellation estimate counts the micro-triangles the baseline bui
     const SceneMesh& sm = s.meshes[0];
     INFO(sm.mesh.name << " " << sm.mesh.triangles.size() << " triangles");
     const TessellationEstimate e = estimateTessellation(sm.mesh, *sm.displacement);
-    const EmbreeScene accel(s, AccelOptions{.tessellate = true, .traversal = {}});
+    const EmbreeScene accel(s, AccelOptions::withBaseline("tessellated"));
     const MemoryReport mem = accel.memory();
     // Exact: the micro-triangles, and the buffers sized by them.
     CHECK(e.microTriangles == accel.microTriangles());
@@ -273,7 +273,7 @@ TEST_CASE("a tessellation that does not fit is refused before it is built", "[me
   // 12 MiB: the traversal's rmip (4.6 + 2 MiB) fits, the 130 K micro-triangles do not.
   MemoryLimit lim("12M");
   REQUIRE(!fitsInMemory(peak));
-  const std::string msg = errorOf([&] { const EmbreeScene a(s, AccelOptions{.tessellate = true, .traversal = {}}); });
+  const std::string msg = errorOf([&] { const EmbreeScene a(s, AccelOptions::withBaseline("tessellated")); });
   INFO(msg);
   CHECK(msg.find('\n') == std::string::npos);
   CHECK_THAT(msg, Contains("memory_test.json: meshes[0] (map ") && Contains("--baseline tessellated needs") &&

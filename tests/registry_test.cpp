@@ -3,7 +3,9 @@
 // both conformance suites (tests/fixtures/traversal_cases.h reads the registries), listed in the
 // CLI help and selectable by name, with no other edit. Also: the opt-in static
 // traversal instantiation answers exactly as the generic path.
+#include "core/procedural.h"
 #include "inversion/newton.h"
+#include "render/embree_scene.h"
 #include "traversal/strategy_catalog.h"
 #include "traversal/traversal.h"
 #include "strategies/midpoint2d.h"
@@ -123,6 +125,43 @@ TEST_CASE("registry: a strategy registered with one line is listed and selectabl
   CHECK_THROWS_WITH(RangeQueryRegistry::instance().add("global", {}), Catch::Contains("registered twice"));
 }
 
+TEST_CASE("registry: the tessellated baseline is registered where it is built, first of the baselines",
+          "[registry][render]") {
+  // Registered by render/embree_scene.cpp (linked here), like the intersectors' baselines
+  // by theirs, marked as built by the scene: listed, chosen by name, kept out of the
+  // intersectors' conformance suites.
+  const BaselineRegistry& reg = BaselineRegistry::instance();
+  REQUIRE(reg.has("tessellated"));
+  CHECK(reg.traits("tessellated").builtByScene);
+  CHECK_FALSE(reg.traits("tessellated").approximate);
+  const std::vector<std::string> names = baselineNames();
+  REQUIRE(!names.empty());
+  CHECK(names.front() == "tessellated");  // where the hand-inserted name was
+  CHECK(contains(names, "bruteforce"));
+  CHECK(contains(names, "tfdm"));
+  CHECK_FALSE(contains(exactBaselines(), "tessellated"));
+  const nlohmann::json j = strategiesJson();
+  REQUIRE(!j.at("baselines").empty());
+  CHECK(j.at("baselines")[0].at("name") == "tessellated");
+  CHECK(j.at("baselines")[0].at("summary") == "the micro-triangles built and traced by Embree (the speed limit)");
+  CHECK(j.at("baselines").size() == names.size());
+  // Chosen like any baseline: EmbreeScene builds it from TraversalConfig::baseline, and
+  // its parameters are checked like every baseline's (it has none).
+  Scene scene;
+  scene.path = "<quad>";
+  SceneMesh q;
+  q.mesh = quadMesh(1.0f, 0.0f, 2);
+  q.displacement = Displacement{std::make_shared<const HeightMap>(proceduralHeightMap(16, 16, 3)), 0.05f, 0.0f, vec2(1.0f)};
+  scene.meshes.push_back(std::move(q));
+  AccelOptions tess = AccelOptions::withBaseline("tessellated");
+  const EmbreeScene accel(scene, tess);
+  CHECK(accel.tessellated());
+  CHECK(accel.geometryName() == "tessellated");
+  CHECK(accel.microTriangles() > 0);
+  tess.traversal.baselineParams = {{"bogus", 1}};
+  CHECK_THROWS_WITH(EmbreeScene(scene, tess), Catch::Contains("strategies.baseline") && Catch::Contains("bogus"));
+}
+
 TEST_CASE("registry: both conformance suites run every registered combination", "[registry][conformance]") {
   const auto configs = conformanceConfigs();
   size_t combos = 0;
@@ -161,6 +200,11 @@ TEST_CASE("registry: the oblong binary's help and strategy list read its registr
   bool ceres = false;
   for (const auto& e : j.at("inverter")) ceres |= e.at("name") == "ceres" && e.at("slow_reference") == true;
   CHECK(ceres);
+  // Every baseline, the one the scene builds (tessellated) first, in --help's choices too.
+  REQUIRE(j.at("baselines").size() >= 4);
+  CHECK(j.at("baselines")[0].at("name") == "tessellated");
+  for (const auto& e : j.at("baselines")) CHECK(help.out.find(e.at("name").get<std::string>()) != std::string::npos);
+  CHECK(help.out.find("tessellated | bruteforce") != std::string::npos);
 }
 
 TEST_CASE("registry: an opt-in static instantiation answers as the generic path", "[registry][traversal]") {

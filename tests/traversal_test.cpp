@@ -57,8 +57,8 @@ TEST_CASE("the named splitters are registered and validate their parameters",
   bad.marchingScale = 0;
   CHECK_THROWS_WITH(createIntersector(bad, s.tris, s.disp), Catch::Contains("marching scale"));
   bad = config("rmip", "newton", "midpoint2d");
-  bad.baseline = "tessellated";
-  CHECK_THROWS_WITH(createIntersector(bad, s.tris, s.disp), Catch::Contains("unknown baseline"));
+  bad.baseline = "tessellated";  // registered (render/embree_scene.cpp), but built by the scene
+  CHECK_THROWS_WITH(createIntersector(bad, s.tris, s.disp), Catch::Contains("not an intersector"));
   // Baseline parameters are checked like strategy parameters.
   TraversalConfig b;
   b.baseline = "nope";
@@ -252,7 +252,7 @@ TEST_CASE("a scene updated after map edits traces as one built on the edited map
       auto map = std::make_shared<HeightMap>(src->width(), src->height(), src->texels(), src->name());
       scene.meshes[0].displacement->map = map;
       scene.range.params = nlohmann::json::parse(params);
-      const AccelOptions opts{false, traversalConfigOf(scene)};
+      const AccelOptions opts{traversalConfigOf(scene)};
       EmbreeScene updated(scene, opts);
       const Mesh& mesh = scene.meshes[0].mesh;
       auto triangles = [&] {
@@ -352,7 +352,7 @@ TEST_CASE("a 4320x2161 float relief on a sphere: rmip within 1.5x a 16-bit mipma
        {{{"shape", {{"type", "sphere"}, {"radius", 1}, {"segments", {96, 48}}}},
          {"displacement", {{"map", map}, {"scale", 0.00004}, {"bias", 0.0}}}}}}};
   Scene scene = parseScene(doc, (dir / "relief.json").string());
-  const AccelOptions opts{false, traversalConfigOf(scene)};
+  const AccelOptions opts{traversalConfigOf(scene)};
   const EmbreeScene rmip(scene, opts);
   const nlohmann::json d = rmip.describe().at(0).at("range");
   INFO(d.dump());
@@ -427,7 +427,7 @@ TEST_CASE("rays from 1e6 and 1e7 away hit as rays from nearby", "[traversal][far
   s.meshes.push_back(std::move(q));
   AccelOptions bf, tess;
   bf.traversal.baseline = "bruteforce";
-  tess.tessellate = true;
+  tess.traversal.baseline = "tessellated";
   const EmbreeScene canonical(s, AccelOptions{}), brute(s, bf), tessellated(s, tess);
   std::mt19937 rng(8);
   std::uniform_real_distribution<float> U(-0.1f, 0.1f);

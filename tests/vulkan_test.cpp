@@ -15,7 +15,7 @@
 #include "render/rays_io.h"
 #include "render/renderer.h"
 #include "render/vulkan/rmip_layout.h"
-#include "render/vulkan/vulkan_render.h"
+#include "render/renderer.h"
 #include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"
 #include "tests/test_util.h"
@@ -520,7 +520,7 @@ TEST_CASE("vulkan: --lod cone renders as on the CPU", "[vulkan][lod]") {
     o.integrator = integ;
     o.progress = nullptr;
     const RenderResult a = render(s, cpu, o);
-    const RenderResult b = vk::render(s, gpu, o);
+    const RenderResult b = render(s, gpu, o);
     size_t differ = 0;
     for (size_t i = 0; i < a.aov.color.pixels.size(); ++i) {
       const vec3 d = glm::abs(a.aov.color.pixels[i] - b.aov.color.pixels[i]);
@@ -569,7 +569,7 @@ TEST_CASE("vulkan: the asteroid renders as on the CPU", "[vulkan]") {
     o.normals = integ == Integrator::AO ? ShadingNormals::Smooth : ShadingNormals::Micro;
     o.progress = nullptr;
     const RenderResult a = render(s, cpu, o);
-    const RenderResult b = vk::render(s, gpu, o);
+    const RenderResult b = render(s, gpu, o);
     size_t differ = 0;
     float maxDiff = 0;
     for (size_t i = 0; i < a.aov.color.pixels.size(); ++i) {
@@ -591,7 +591,7 @@ TEST_CASE("vulkan: the asteroid renders as on the CPU", "[vulkan]") {
 TEST_CASE("vulkan: bad input gets one clear error", "[vulkan]") {
   const Scene s = loadScene(scenePath("quad_tiled.json"));
   AccelOptions tess;
-  tess.tessellate = true;
+  tess.traversal.baseline = "tessellated";
   CHECK_THROWS_WITH(vk::VulkanScene(s, tess), Catch::Contains("--baseline tessellated"));
   AccelOptions other;
   other.traversal.range = "minmax_mipmap";
@@ -679,9 +679,9 @@ TEST_CASE("vulkan: a render in bands is the render in one band", "[vulkan]") {
   o.size = ivec2(24, 18);
   o.spp = 3;
   o.integrator = Integrator::Path;
-  const RenderResult one = vk::render(s, gpu, o);
+  const RenderResult one = render(s, gpu, o);
   o.bandSamples = 100;  // 13 bands, cutting pixels between their samples
-  const RenderResult bands = vk::render(s, gpu, o);
+  const RenderResult bands = render(s, gpu, o);
   CHECK(one.aov.color.pixels == bands.aov.color.pixels);
   CHECK(one.aov.steps == bands.aov.steps);
   CHECK(one.aov.depth == bands.aov.depth);

@@ -34,8 +34,10 @@ std::unique_ptr<Intersector> createIntersector(const TraversalConfig& cfg, std::
   if (!cfg.baseline.empty()) {
     const BaselineRegistry& reg = BaselineRegistry::instance();
     if (!reg.has(cfg.baseline))
-      fail(cfg.where("strategies.baseline"), "unknown baseline '{}' (known: {}; the tessellated baseline is not an intersector)",
-           cfg.baseline, reg.list());
+      fail(cfg.where("strategies.baseline"), "unknown baseline '{}' (known: {})", cfg.baseline, reg.list());
+    if (reg.traits(cfg.baseline).builtByScene)
+      fail(cfg.where("strategies.baseline"), "the {} baseline is built by the scene (EmbreeScene), not an intersector",
+           cfg.baseline);
     ParamSet bps(cfg.baselineParams, cfg.where("strategies.baseline"));
     return reg.create(cfg.baseline, bps, BaselineContext{cfg, &triangles, disp});
   }

@@ -11,6 +11,7 @@
 #include "core/registry.h"
 #include "core/triangle.h"
 #include "strategies/range_query.h"
+#include "traversal/ray_counters.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -23,36 +24,6 @@
 #include <vector>
 
 namespace oblong {
-
-// Per-ray work counters (summed over the prisms a ray visits).
-struct RayCounters {
-  int64_t boxes = 0;          // ray/box tests of uv-rectangle bounds
-  int64_t rangeQueries = 0;   // RangeQuery::query calls
-  int64_t inversions = 0;     // Inverter calls
-  int64_t cellsMarched = 0;   // grid cells visited by texel marching
-  int64_t microTriangles = 0; // ray/micro-triangle tests
-  int64_t prisms = 0;         // prisms entered
-  // Traversal steps as the RMIP paper counts them (Fig. 9): boxes + marched cells.
-  int64_t steps() const { return boxes + cellsMarched; }
-  RayCounters& operator+=(const RayCounters& o) {
-    boxes += o.boxes, rangeQueries += o.rangeQueries, inversions += o.inversions;
-    cellsMarched += o.cellsMarched, microTriangles += o.microTriangles, prisms += o.prisms;
-    return *this;
-  }
-};
-
-// The counters as `--stats` JSON writes them (CPU and Vulkan alike), with the mean steps
-// over `rays`.
-inline nlohmann::json countersJson(const RayCounters& c, int64_t rays) {
-  return {{"boxes", c.boxes},
-          {"range_queries", c.rangeQueries},
-          {"inversions", c.inversions},
-          {"cells_marched", c.cellsMarched},
-          {"micro_triangles", c.microTriangles},
-          {"prisms", c.prisms},
-          {"steps", c.steps()},
-          {"steps_per_ray", double(c.steps()) / double(std::max<int64_t>(1, rays))}};
-}
 
 struct TriangleHit {
   float t = kInfinity;
@@ -74,8 +45,8 @@ struct TraversalConfig {
   // "" (the traversal above) or a registered baseline (BaselineRegistry below):
   // "bruteforce" (every micro-triangle of the prism's triangle: the oracle), "tfdm"
   // (Thonat et al. 2021's quad-tree traversal), "fixedstep" (PDM-style constant-step
-  // marching, approximate). The "tessellated" baseline is not an Intersector: it is
-  // EmbreeScene.
+  // marching, approximate), "tessellated" (registered by render/embree_scene.cpp,
+  // StrategyTraits::builtByScene: not an Intersector, EmbreeScene builds it).
   std::string baseline;
   // A level of detail per ray (Ray::lod; docs/lod.md): one intersector per level of the
   // map, each blending toward the next with the ray's fraction (createIntersector).
@@ -128,7 +99,9 @@ class Intersector {
 // Baselines are registered like strategies (core/registry.h), one line in their .cpp:
 //     OBLONG_REGISTER_BASELINE("tfdm", makeTfdm, StrategyTraits{...});
 // StrategyTraits::approximate marks a baseline that is not exact by design (fixedstep):
-// the conformance suites run every other one against the oracle.
+// the conformance suites run every other one against the oracle. A layer above may
+// register a baseline its scene builds instead of an Intersector
+// (StrategyTraits::builtByScene: `tessellated`, render/embree_scene.cpp).
 // Padding of a prism's box traced in the world at `origin` + box (a mesh's frame):
 // Embree's ray/box test for user geometry and GPU implementations' box tests are not
 // robust (t = lo·(1/d) − o·(1/d) in float, off by about |o|·2^-24 along each axis).

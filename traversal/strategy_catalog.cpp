@@ -4,6 +4,8 @@
 #include "strategies/range_query.h"
 #include "strategies/splitter.h"
 
+#include <algorithm>
+
 namespace oblong {
 
 std::vector<std::string> strategyNames(StrategyKind kind) {
@@ -31,8 +33,9 @@ std::string strategyChoices(StrategyKind kind) {
 }
 
 std::vector<std::string> baselineNames() {
-  std::vector<std::string> n = BaselineRegistry::instance().names();
-  n.insert(n.begin(), "tessellated");
+  const BaselineRegistry& reg = BaselineRegistry::instance();
+  std::vector<std::string> n = reg.names();
+  std::stable_partition(n.begin(), n.end(), [&](const std::string& b) { return reg.traits(b).builtByScene; });
   return n;
 }
 
@@ -40,7 +43,7 @@ std::vector<std::string> exactBaselines() {
   std::vector<std::string> out;
   const BaselineRegistry& reg = BaselineRegistry::instance();
   for (const std::string& n : reg.names())
-    if (n != "bruteforce" && !reg.traits(n).approximate) out.push_back(n);
+    if (n != "bruteforce" && !reg.traits(n).approximate && !reg.traits(n).builtByScene) out.push_back(n);
   return out;
 }
 
@@ -71,11 +74,8 @@ nlohmann::json strategiesJson() {
     }
   }
   j["baselines"] = nlohmann::json::array();
-  j["baselines"].push_back({{"name", "tessellated"},
-                            {"summary", "the micro-triangles built and traced by Embree (the speed limit)"},
-                            {"approximate", false}});
   const BaselineRegistry& reg = BaselineRegistry::instance();
-  for (const std::string& n : reg.names())
+  for (const std::string& n : baselineNames())
     j["baselines"].push_back(
         {{"name", n}, {"summary", reg.traits(n).summary}, {"approximate", reg.traits(n).approximate}});
   const TraversalConfig d;

@@ -22,11 +22,13 @@ const StrategyTraits& strategyTraits(StrategyKind kind, const std::string& name)
 // "rmip | minmax_mipmap | safety_zones": the choices as --help lists them.
 std::string strategyChoices(StrategyKind kind);
 
-// The registered baselines (BaselineRegistry) and "tessellated" (EmbreeScene's
-// pre-tessellation, not an intersector), as --baseline accepts them.
+// The registered baselines (BaselineRegistry), as --baseline accepts them: those the
+// scene builds (StrategyTraits::builtByScene: "tessellated", registered by render/
+// where the program links it) first, then the intersectors, each by name.
 std::vector<std::string> baselineNames();
-// The registered baselines that claim exactness: every one but the approximate ones and
-// the oracle itself ("bruteforce"), for the conformance suites.
+// The registered intersector baselines that claim exactness: every one but the
+// approximate ones, those the scene builds and the oracle itself ("bruteforce"), for
+// the conformance suites.
 std::vector<std::string> exactBaselines();
 
 // One registered range query × inverter × splitter combination with default parameters.

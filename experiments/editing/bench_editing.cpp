@@ -56,7 +56,7 @@ AccelOptions optionsFor(const Scene& base, const Config& c) {
   s.range.name = c.range;
   s.range.params = nlohmann::json::parse(c.params);
   s.baseline.name = c.baseline;
-  return AccelOptions{false, traversalConfigOf(s)};
+  return AccelOptions{traversalConfigOf(s)};
 }
 
 // Same hits pixel by pixel: depth and shading normal bit for bit.

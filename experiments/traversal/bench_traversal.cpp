@@ -115,7 +115,7 @@ std::vector<Config> configs() {
     c.push_back({fmt::format("canonical_march{}", ms), o});
   }
   AccelOptions tess;
-  tess.tessellate = true;
+  tess.traversal.baseline = "tessellated";
   c.push_back({"tessellated", tess});
   return c;
 }

@@ -25,6 +25,7 @@
 #include "render/progress.h"
 #include "render/rays_io.h"
 #include "render/renderer.h"
+#include "render/report.h"
 #include "traversal/strategy_catalog.h"
 #include "traversal/traversal.h"
 #include "render/vulkan/commands.h"
@@ -33,12 +34,6 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
-
-#include <tbb/global_control.h>
-#include <tbb/info.h>
-#include <tbb/parallel_for.h>
-
-#include <sys/resource.h>
 
 #include <atomic>
 #include <bit>
@@ -106,24 +101,6 @@ void catchInterrupt() {
   sigaction(SIGINT, &sa, nullptr);
 }
 constexpr int kInterruptedStatus = 130;  // 128 + SIGINT, as shells report it
-
-size_t peakMemoryBytes() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return size_t(u.ru_maxrss) * 1024;  // KiB on Linux
-}
-
-int threadsUsed(int requested) {
-  const int hw = tbb::info::default_concurrency();
-  return requested > 0 ? std::min(requested, hw) : hw;
-}
-
-std::string human(size_t bytes) {
-  if (bytes >= (size_t(1) << 30)) return fmt::format("{:.2f} GiB", bytes / double(1 << 30));
-  if (bytes >= (size_t(1) << 20)) return fmt::format("{:.2f} MiB", bytes / double(1 << 20));
-  if (bytes >= 1024) return fmt::format("{:.1f} KiB", bytes / 1024.0);
-  return fmt::format("{} B", bytes);
-}
 
 // Strategy flags shared by render and trace; unset flags keep the scene's choice.
 constexpr double kMaxFloat = std::numeric_limits<float>::max();
@@ -231,52 +208,17 @@ struct StrategyFlags {
       c.fixedStep = float(*step);
       c.baselineParams.erase("step");
     }
-    if (c.baseline == "tessellated") {
-      o.tessellate = true;
-      c.baseline.clear();
-    }
     return o;
   }
 };
 
-nlohmann::json configJson(const AccelOptions& o) {
-  const TraversalConfig& c = o.traversal;
-  if (o.tessellate) return {{"baseline", "tessellated"}};
-  nlohmann::json j = {{"range", {{"name", c.range}, {"params", c.rangeParams}}},
-                      {"inverter", {{"name", c.inverter}, {"params", c.inverterParams}}},
-                      {"splitter", {{"name", c.splitter}, {"params", c.splitterParams}}},
-                      {"marching_scale", c.marchingScale},
-                      {"inversion_in_traversal", c.inversionInTraversal}};
-  if (!c.baseline.empty()) j["baseline"] = c.baseline;
-  if (!c.baselineParams.empty()) j["baseline_params"] = c.baselineParams;
-  if (c.baseline == "fixedstep") j["step"] = c.baselineParams.value("step", c.fixedStep);
-  return j;
-}
-
-// The scene's level of detail and, per displaced mesh, the λ it is traced at.
-nlohmann::json lodJson(const Scene& scene) {
-  if (scene.lodCone) return {{"requested", "cone"}, {"bias", scene.lodBias}};
-  if (!scene.lod) return "off";
-  nlohmann::json per = nlohmann::json::array();
-  for (const SceneMesh& sm : scene.meshes)
-    per.push_back(sm.displacement ? nlohmann::json(sm.displacement->lod) : nlohmann::json(nullptr));
-  return {{"requested", *scene.lod}, {"per_mesh", per}};
-}
-
 void writeJson(const std::string& path, const nlohmann::json& j) { writeTextOutput(path, j.dump(2) + "\n"); }
 
-// What every --stats file records about the run itself.
-void runJson(nlohmann::json& j, int threadsRequested, double loadSeconds, double wallSeconds) {
-  j["version"] = OBLONG_VERSION;
-  j["threads"] = {{"requested", threadsRequested}, {"used", threadsUsed(threadsRequested)}};
-  j["seconds"]["load"] = loadSeconds;
-  j["seconds"]["total"] = wallSeconds;
-  j["peak_memory"] = peakMemoryBytes();
-}
-
 // Prisms that lost their projection bounds are traversed box-only, much slower; say so.
-void warnBoxOnly(const Scene& scene, const EmbreeScene& accel) {
-  for (const auto& p : accel.prismCounts()) {
+void warnBoxOnly(const Scene& scene, const TraceBackend& backend) {
+  const auto* accel = dynamic_cast<const EmbreeScene*>(&backend);
+  if (!accel) return;  // the counts are the CPU scene's
+  for (const auto& p : accel->prismCounts()) {
     const size_t boxOnly = p.built - p.wellPosed;
     if (boxOnly == 0) continue;
     eprint(
@@ -342,83 +284,35 @@ int runRender(const std::string& scenePath, const RenderFlags& f, const Strategy
   opts.progress = &progress;
   opts.interrupt = &gInterrupted;
   Stats::reset();
+  std::unique_ptr<TraceBackend> backend;
   if (deviceFlag == "vulkan") {
+    checkBandsFit(opts);
     progress.phase("building on Vulkan");
-    return vk::renderCommand(scene, accelOpts, opts, f.out, f.aovs, f.heatmap, f.statsPath);
+    backend = vk::makeScene(scene, accelOpts);
+  } else {
+    const std::string& baseline = accelOpts.traversal.baseline;
+    progress.phase("building the acceleration structures" + (baseline.empty() ? "" : " (--baseline " + baseline + ")"));
+    backend = std::make_unique<EmbreeScene>(scene, accelOpts);
   }
-  progress.phase(accelOpts.tessellate ? "pre-tessellating" : "building the acceleration structures");
-  EmbreeScene accel(scene, accelOpts);
   progress.clear();
-  warnBoxOnly(scene, accel);
+  warnBoxOnly(scene, *backend);
   if (gInterrupted) {
     eprint("oblong: interrupted before rendering: nothing written\n");
     return kInterruptedStatus;
   }
-  progress.phase(fmt::format("rendering {}x{} at {} spp", opts.size.x, opts.size.y, opts.spp),
+  progress.phase(fmt::format("rendering {}x{} at {} spp{}", opts.size.x, opts.size.y, opts.spp,
+                             deviceFlag == "vulkan" ? " on Vulkan" : ""),
                  int64_t(opts.size.x) * opts.size.y);
-  RenderResult res = render(scene, accel, opts);
+  const RenderResult res = render(scene, *backend, opts);
   progress.phase("writing " + f.out);
   writeImage(res.aov.color, f.out);
   if (!f.aovs.empty()) writeAOVs(res.aov, f.aovs);
   if (!f.heatmap.empty()) writeHeatMap(res.aov, f.heatmap);
   progress.clear();
-  const MemoryReport mem = accel.memory();
-  const double rays = double(res.primaryRays + res.secondaryRays);
-  const double mrays = rays / std::max(res.seconds, 1e-9) * 1e-6;
-  double meanPrimarySteps = 0;
-  for (float st : res.aov.steps) meanPrimarySteps += st;
-  meanPrimarySteps /= double(std::max<int64_t>(1, res.pixelsDone));
-  fmt::print("oblong render: {} -> {}{}\n", scene.path, f.out, f.defaultOut ? " (the default name; -o chooses)" : "");
-  if (accel.tessellated())
-    fmt::print("  geometry : pre-tessellated (baseline), {} base triangles, {} micro-triangles, built in {:.2f} s\n",
-               accel.baseTriangles(), accel.microTriangles(), accel.buildSeconds());
-  else
-    fmt::print("  geometry : {}, {} base triangles, built in {:.2f} s\n", accel.geometryName(),
-               accel.baseTriangles(), accel.buildSeconds());
-  for (const auto& m : mem) fmt::print("  memory   : {:<24} {}\n", m.name, human(m.bytes));
-  fmt::print(
-      "  summary  : {}x{} {} spp {}, {:.3f} s, {:.2f} Mrays/s ({} camera + {} secondary rays, {:.1f}% hit), "
-      "{:.1f} steps/camera ray, {:.1f} steps/ray, memory {}, peak {}\n",
-      opts.size.x, opts.size.y, opts.spp, integratorName(opts.integrator), res.seconds, mrays, res.primaryRays,
-      res.secondaryRays, 100.0 * res.hits / std::max<int64_t>(1, res.primaryRays), meanPrimarySteps,
-      double(res.counters.steps()) / std::max(1.0, rays), human(totalBytes(mem)), human(peakMemoryBytes()));
-  if (res.partial)
-    fmt::print("  partial  : interrupted; {} of {} pixels rendered (the rest is black)\n", res.pixelsDone,
-               int64_t(opts.size.x) * opts.size.y);
-  if (!f.heatmap.empty()) {
-    float maxSteps = 0;
-    for (float st : res.aov.steps) maxSteps = std::max(maxSteps, st);
-    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {:.0f}\n", f.heatmap,
-               std::max(1.0f, maxSteps));
-  }
-  if (!f.statsPath.empty()) {
-    nlohmann::json j;
-    j["scene"] = scene.path;
-    j["geometry"] = accel.geometryName();
-    j["config"] = configJson(accelOpts);
-    j["config"]["lod"] = lodJson(scene);
-    if (scene.lodCone && res.primaryRays > 0)
-      j["lod_per_ray"] = {{"camera_mean", res.cameraLodSum / double(res.primaryRays)},
-                          {"camera_at_0", double(res.cameraLodZero) / double(res.primaryRays)}};
-    j["traversal"] = accel.describe();
-    j["image"] = {{"width", opts.size.x}, {"height", opts.size.y}, {"file", f.out}};
-    j["integrator"] = integratorName(opts.integrator);
-    j["normals"] = shadingNormalsName(opts.normals);
-    j["spp"] = opts.spp;
-    j["seed"] = opts.seed;
-    j["seconds"] = {{"build", accel.buildSeconds()}, {"render", res.seconds}};
-    j["partial"] = res.partial;
-    j["pixels"] = {{"rendered", res.pixelsDone}, {"total", int64_t(opts.size.x) * opts.size.y}};
-    j["rays"] = {{"primary", res.primaryRays}, {"secondary", res.secondaryRays}, {"hits", res.hits}};
-    j["mrays_per_second"] = mrays;
-    j["steps_per_camera_ray"] = meanPrimarySteps;
-    for (const auto& m : mem) j["memory"][m.name] = m.bytes;
-    j["memory_total"] = totalBytes(mem);
-    j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
-    j["counters"] = Stats::snapshot();
-    runJson(j, f.threads, loadSeconds, progress.elapsed());
-    writeJson(f.statsPath, j);
-  }
+  const RenderReport report{scene, accelOpts, *backend, opts, res, f.out, f.heatmap, f.defaultOut};
+  printRenderSummary(report);
+  if (!f.statsPath.empty())
+    writeJson(f.statsPath, renderStats(report, {OBLONG_VERSION, f.threads, loadSeconds, progress.elapsed()}));
   return res.partial ? kInterruptedStatus : 0;
 }
 
@@ -453,51 +347,22 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   const std::vector<Ray> rays = readRays(raysPath);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Stats::reset();
-  if (deviceFlag == "vulkan") return vk::traceCommand(scene, accelOpts, rays, raysPath, out, statsPath, &gInterrupted);
-  EmbreeScene accel(scene, accelOpts);
-  warnBoxOnly(scene, accel);
-  std::vector<Hit> hits(rays.size());
-  std::vector<RayCounters> perRay(rays.size());
-  std::unique_ptr<tbb::global_control> limit;
-  if (threads > 0)
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-  const auto traceStart = std::chrono::steady_clock::now();
-  tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) {
-    if (!gInterrupted.load(std::memory_order_relaxed)) hits[i] = accel.intersect(rays[i], &perRay[i]);
-  });
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - traceStart).count();
+  const std::unique_ptr<TraceBackend> backend =
+      deviceFlag == "vulkan" ? vk::makeScene(scene, accelOpts) : std::make_unique<EmbreeScene>(scene, accelOpts);
+  warnBoxOnly(scene, *backend);
+  const TraceResult res = traceRays(*backend, rays, threads, &gInterrupted);
   // A hits file must hold every ray's answer: an interrupted trace writes none.
-  if (gInterrupted) {
+  if (res.interrupted) {
     eprint("oblong: interrupted: no hits written (a hits file holds every ray or none)\n");
     return kInterruptedStatus;
   }
-  writeHits(out, hits);
-  RayCounters total;
-  size_t found = 0;
-  for (size_t i = 0; i < rays.size(); ++i) total += perRay[i], found += hits[i].valid();
-  const MemoryReport mem = accel.memory();
-  fmt::print("oblong trace: {} rays -> {}{}: {} hits, {}, {:.3f} s, {:.2f} Mrays/s, {:.1f} steps/ray, memory {}\n",
-             rays.size(), out, defaultOut ? " (the default name; -o chooses)" : "", found, accel.geometryName(),
-             seconds, rays.size() / std::max(seconds, 1e-9) * 1e-6,
-             double(total.steps()) / std::max<size_t>(1, rays.size()), human(totalBytes(mem)));
-  if (!statsPath.empty()) {
-    nlohmann::json j;
-    j["scene"] = scene.path;
-    j["rays"] = {{"file", raysPath}, {"count", rays.size()}, {"hits", found}};
-    j["geometry"] = accel.geometryName();
-    j["config"] = configJson(accelOpts);
-    j["config"]["lod"] = lodJson(scene);
-    j["traversal"] = accel.describe();
-    j["seconds"] = {{"build", accel.buildSeconds()}, {"trace", seconds}};
-    j["mrays_per_second"] = rays.size() / std::max(seconds, 1e-9) * 1e-6;
-    for (const auto& m : mem) j["memory"][m.name] = m.bytes;
-    j["memory_total"] = totalBytes(mem);
-    j["ray_counters"] = countersJson(total, int64_t(rays.size()));
-    j["counters"] = Stats::snapshot();
-    runJson(j, threads, loadSeconds,
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    writeJson(statsPath, j);
-  }
+  writeHits(out, res.hits);
+  const TraceReport report{scene, accelOpts, *backend, res, raysPath, out, defaultOut};
+  printTraceSummary(report);
+  if (!statsPath.empty())
+    writeJson(statsPath,
+              traceStats(report, {OBLONG_VERSION, threads, loadSeconds,
+                                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}));
   return 0;
 }
 
@@ -510,7 +375,7 @@ std::string infoValue(const std::string& key, const nlohmann::json& v) {
     for (const auto& e : v) s += (s.empty() ? "" : ", ") + infoValue(key, e);
     return "[" + s + "]";
   }
-  if (bytes && v.is_number_unsigned()) return human(v.get<size_t>());
+  if (bytes && v.is_number_unsigned()) return memoryText(v.get<size_t>());
   return v.is_string() ? v.get<std::string>() : v.dump();
 }
 
@@ -520,7 +385,7 @@ std::string infoValue(const std::string& key, const nlohmann::json& v) {
 void printTraversal(const nlohmann::json& d) {
   const nlohmann::json& rq = d.at("range");
   fmt::print("      built    : {} ({}), {}\n", rq.at("exact").get<bool>() ? "exact bounds" : "conservative bounds",
-             infoValue("params", rq.at("params")), human(rq.at("bytes").get<size_t>()));
+             infoValue("params", rq.at("params")), memoryText(rq.at("bytes").get<size_t>()));
   if (rq.contains("layout"))
     for (const auto& [k, v] : rq.at("layout").items()) {
       if (k == "stores_wrap" || k == "wrap_bytes") continue;
@@ -586,12 +451,12 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
     fmt::print("  mesh {} '{}': {} vertices, {} triangles, {}\n", i, sm.mesh.name, sm.mesh.positions.size(),
                sm.mesh.triangles.size(), sm.displacement ? "displaced" : "plain (Embree triangles)");
     if (!sm.displacement) {
-      fmt::print("    built    : no range query, no prisms ({})\n", human(sm.mesh.bytes()));
+      fmt::print("    built    : no range query, no prisms ({})\n", memoryText(sm.mesh.bytes()));
       continue;
     }
     const Displacement& d = *sm.displacement;
     fmt::print("    map {} ({}x{}), scale {}, bias {}, tiling ({}, {}), {}\n", d.map->name(), d.map->width(),
-               d.map->height(), d.scale, d.bias, d.tiling.x, d.tiling.y, human(d.map->bytes()));
+               d.map->height(), d.scale, d.bias, d.tiling.x, d.tiling.y, memoryText(d.map->bytes()));
     // What the traversal builds: the range query sized by the triangles' uv boxes
     // (as createIntersector does) and one prism per displaceable triangle.
     std::vector<DisplacedTriangle> tris(sm.mesh.triangles.size());
@@ -614,8 +479,19 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
     else
       fmt::print("    LoD      : lod {}: level {} grid ({}x{} samples, {}) at the heights of lod {}; the {}x{} "
                  "full-resolution map kept\n",
-                 d.lod, int(std::floor(d.lod)), d.map->width(), d.map->height(), human(d.map->bytes()), d.lod,
+                 d.lod, int(std::floor(d.lod)), d.map->width(), d.map->height(), memoryText(d.map->bytes()), d.lod,
                  d.level0->width(), d.level0->height());
+    if (!cfg.baseline.empty() && BaselineRegistry::instance().has(cfg.baseline) &&
+        BaselineRegistry::instance().traits(cfg.baseline).builtByScene) {
+      // No intersector: the scene builds the micro-triangles (EmbreeScene's estimate).
+      const TessellationEstimate e = estimateTessellation(sm.mesh, d);
+      fmt::print("    baseline '{}': no range query; {} micro-triangles: {} of vertices, uvs and indices, about {} "
+                 "of Embree BVH\n",
+                 cfg.baseline, e.microTriangles, memoryText(e.geometryBytes()), memoryText(e.bvhBytes()));
+      total += e.geometryBytes();
+      ++displaced;
+      continue;
+    }
     // Built once, as the renderer builds it; what is shown is that structure.
     const auto is = createIntersector(cfg, tris, d);
     if (const auto* t = dynamic_cast<const TraversalIntersectorBase*>(is.get())) {
@@ -634,16 +510,16 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
     }
     const MemoryReport mem = is->memory();
     std::string parts;
-    for (const auto& m : mem) parts += fmt::format("{}{} {}", parts.empty() ? "" : ", ", m.name, human(m.bytes));
-    fmt::print("    built    : {} = {}\n", parts, human(totalBytes(mem)));
+    for (const auto& m : mem) parts += fmt::format("{}{} {}", parts.empty() ? "" : ", ", m.name, memoryText(m.bytes));
+    fmt::print("    built    : {} = {}\n", parts, memoryText(totalBytes(mem)));
     total += totalBytes(mem);
     ++displaced;
   }
   if (displaced == 0) fmt::print("  no displaced mesh: no range query built\n");
   else
     fmt::print("  total    : {} built for {} displaced mesh{} (plus Embree's BVH, reported by oblong render)\n",
-               human(total), displaced, displaced == 1 ? "" : "es");
-  fmt::print("  peak     : {} of process memory (each structure above built once)\n", human(peakMemoryBytes()));
+               memoryText(total), displaced, displaced == 1 ? "" : "es");
+  fmt::print("  peak     : {} of process memory (each structure above built once)\n", memoryText(peakMemoryBytes()));
   return 0;
 }
 

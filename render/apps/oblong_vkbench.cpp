@@ -11,7 +11,9 @@
 // GPU's answers compare by one number.
 #include "core/error.h"
 #include "render/camera.h"
+#include "render/integrator.h"
 #include "render/sampling.h"
+#include "render/trace_backend.h"
 #include "render/vulkan/bake_file.h"
 #include "render/vulkan/runner.h"
 
@@ -34,16 +36,28 @@ using namespace oblong::vkgpu;
 namespace {
 
 // The hits CSV of render/rays_io.cpp writeHits (%.9g round-trips a float).
-std::string hitsCsv(const std::vector<HitGpu>& hits) {
+std::string hitsCsv(const std::vector<Hit>& hits) {
   std::string text = "t,mesh,prim,u,v\n";
-  for (const HitGpu& h : hits) {
-    if (h.mesh < 0) {
+  for (const Hit& h : hits) {
+    if (!h.valid()) {
       text += "inf,,,,\n";
       continue;
     }
-    fmt::format_to(std::back_inserter(text), "{:.9g},{},{},{:.9g},{:.9g}\n", h.t, h.mesh, h.prim, h.u, h.v);
+    fmt::format_to(std::back_inserter(text), "{:.9g},{},{},{:.9g},{:.9g}\n", h.t, h.mesh, h.prim, h.uv.x, h.uv.y);
   }
   return text;
+}
+
+// The same hits, bit for bit (t, mesh, triangle, uv, normal).
+bool sameHits(const std::vector<Hit>& a, const std::vector<Hit>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const Hit &x = a[i], &y = b[i];
+    if (x.mesh != y.mesh || x.prim != y.prim || std::memcmp(&x.t, &y.t, sizeof x.t) != 0 ||
+        std::memcmp(&x.uv, &y.uv, sizeof x.uv) != 0 || std::memcmp(&x.ng, &y.ng, sizeof x.ng) != 0)
+      return false;
+  }
+  return true;
 }
 
 std::string hex(uint64_t v) { return fmt::format("{:016x}", v); }
@@ -62,6 +76,9 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
+RayGpu toGpu(const Ray& r) { return {r.o, r.d, r.tmin, r.tmax, r.lod, 0.0f}; }
+Ray fromGpu(const RayGpu& r) { return Ray{r.o, r.d, r.tmin, r.tmax, r.lod}; }
+
 // One kind of dispatch (camera, shadow, bounce): rays and seconds summed per repeat.
 struct Pass {
   std::string name;
@@ -69,138 +86,83 @@ struct Pass {
   std::vector<double> gpu, wall;
 };
 
-struct Bench {
-  Runner& run;
+// The runner as a trace backend (render/trace_backend.h), so that the paths are those of
+// `oblong render`'s integrator (render/integrator.h); every dispatch is timed into its
+// pass (the ray kind) and repeat. Rays are traced as given (no far-origin move: a baked
+// scene's camera is near it).
+class Bench final : public TraceBackend {
+ public:
+  Bench(Runner& run, std::string geometry, uint64_t baseTriangles, double buildSeconds)
+      : run_(run), geometry_(std::move(geometry)), baseTriangles_(baseTriangles), buildSeconds_(buildSeconds) {}
   int repeat = 0;  // current repeat
-  std::vector<Pass> passes;
-  std::vector<HitGpu> trace(const std::string& pass, const std::vector<RayGpu>& rays, bool anyHit,
-                            std::vector<CountersGpu>* counters = nullptr) {
+  const std::vector<Pass>& passes() const { return passes_; }
+
+  double traceHits(RayKind kind, std::span<const Ray> rays, std::span<Hit> hits,
+                   std::span<RayCounters> counters) const override {
+    double seconds = 0;
+    const std::vector<HitGpu> hg = dispatch(kind, rays, counters, false, seconds);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      hits[i] = Hit{};
+      if (hg[i].mesh < 0) continue;
+      hits[i].t = hg[i].t, hits[i].mesh = hg[i].mesh, hits[i].prim = hg[i].prim;
+      hits[i].uv = vec2(hg[i].u, hg[i].v), hits[i].ng = hg[i].ng;
+    }
+    return seconds;
+  }
+  double traceOcclusion(RayKind kind, std::span<const Ray> rays, std::span<uint8_t> blocked,
+                        std::span<RayCounters> counters) const override {
+    double seconds = 0;
+    const std::vector<HitGpu> hg = dispatch(kind, rays, counters, true, seconds);
+    for (size_t i = 0; i < rays.size(); ++i) blocked[i] = hg[i].mesh >= 0 ? 1 : 0;
+    return seconds;
+  }
+  bool concurrent() const override { return false; }
+  std::string geometryName() const override { return geometry_; }
+  size_t baseTriangles() const override { return size_t(baseTriangles_); }
+  double buildSeconds() const override { return buildSeconds_; }
+  MemoryReport memory() const override {
+    MemoryReport r;
+    for (const auto& [name, bytes] : run_.memory()) r.push_back({name, bytes});
+    return r;
+  }
+  nlohmann::json device() const override {
+    return {{"api", "vulkan"}, {"name", run_.deviceName()}, {"driver", run_.driverInfo()}};
+  }
+
+ private:
+  // One dispatch, timed into its pass; seconds: the GPU's (timestamps), else the wall's.
+  std::vector<HitGpu> dispatch(RayKind kind, std::span<const Ray> rays, std::span<RayCounters> counters, bool anyHit,
+                               double& seconds) const {
+    std::vector<RayGpu> gpu(rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) gpu[i] = toGpu(rays[i]);
     std::vector<HitGpu> hits(rays.size());
-    if (counters) counters->assign(rays.size(), CountersGpu{});
-    double wall = 0, gpu = 0;
-    run.trace(rays.data(), rays.size(), hits.data(), counters ? counters->data() : nullptr, anyHit, &wall, &gpu);
-    auto it = std::find_if(passes.begin(), passes.end(), [&](const Pass& p) { return p.name == pass; });
-    if (it == passes.end()) it = passes.insert(passes.end(), Pass{pass, {}, {}, {}});
-    it->rays.resize(size_t(repeat) + 1, 0), it->gpu.resize(size_t(repeat) + 1, 0), it->wall.resize(size_t(repeat) + 1, 0);
-    it->rays[size_t(repeat)] += int64_t(rays.size());
-    it->gpu[size_t(repeat)] += gpu;
-    it->wall[size_t(repeat)] += wall;
+    std::vector<CountersGpu> cg(counters.empty() ? 0 : rays.size());
+    double wall = 0, gpuSeconds = 0;
+    run_.trace(gpu.data(), gpu.size(), hits.data(), cg.empty() ? nullptr : cg.data(), anyHit, &wall, &gpuSeconds);
+    for (size_t i = 0; i < cg.size(); ++i) {
+      RayCounters& c = counters[i];
+      c = RayCounters{};
+      c.prisms = cg[i].prisms, c.boxes = cg[i].boxes, c.rangeQueries = cg[i].rangeQueries;
+      c.inversions = cg[i].inversions, c.cellsMarched = cg[i].cellsMarched, c.microTriangles = cg[i].microTriangles;
+    }
+    const std::string pass = rayKindName(kind);
+    auto it = std::find_if(passes_.begin(), passes_.end(), [&](const Pass& p) { return p.name == pass; });
+    if (it == passes_.end()) it = passes_.insert(passes_.end(), Pass{pass, {}, {}, {}});
+    const size_t r = size_t(repeat);
+    it->rays.resize(r + 1, 0), it->gpu.resize(r + 1, 0), it->wall.resize(r + 1, 0);
+    it->rays[r] += int64_t(rays.size());
+    it->gpu[r] += gpuSeconds;
+    it->wall[r] += wall;
+    seconds = gpuSeconds >= 0 ? gpuSeconds : wall;
     return hits;
   }
+
+  Runner& run_;
+  std::string geometry_;
+  uint64_t baseTriangles_;
+  double buildSeconds_;
+  mutable std::vector<Pass> passes_;  // the dispatches so far (trace calls are const)
 };
-
-RayGpu toGpu(const Ray& r) { return {r.o, r.d, r.tmin, r.tmax, r.lod, 0.0f}; }
-Ray fromGpu(const RayGpu& r) {
-  Ray o;
-  o.o = r.o, o.d = r.d, o.tmin = r.tmin, o.tmax = r.tmax;
-  return o;
-}
-
-// render/vulkan/vulkan_render.cpp's path integrator with micro-triangle normals (the
-// renderer's default): direct light by one shadow ray per light at every vertex, cosine
-// bounces, Russian roulette from the fourth bounce. Returns the mean radiance.
-vec3 tracePaths(Bench& B, const BakedScene& S, const std::vector<RayGpu>& camera, const std::vector<HitGpu>& hits,
-                const std::vector<Rng>& rngs) {
-  struct Path {
-    Rng rng{0, 0};
-    vec3 L{0.0f}, beta{1.0f}, pos{0.0f}, geo{0.0f};
-    int mesh = -1;
-    bool alive = false;
-  };
-  const size_t ns = camera.size();
-  std::vector<Path> paths(ns);
-  for (size_t k = 0; k < ns; ++k) {
-    Path& p = paths[k];
-    p.rng = rngs[k];
-    const HitGpu& h = hits[k];
-    if (h.mesh < 0) {
-      p.L = S.sky;
-      continue;
-    }
-    const Ray r = fromGpu(camera[k]);
-    p.pos = r.at(h.t), p.geo = glm::dot(h.ng, r.d) > 0 ? -h.ng : h.ng, p.mesh = h.mesh, p.alive = true;
-  }
-  std::vector<size_t> owner;
-  std::vector<RayGpu> queue;
-  for (int depth = 0;; ++depth) {
-    struct Shadow {
-      size_t path;
-      vec3 contribution;
-    };
-    std::vector<Shadow> shadows;
-    queue.clear();
-    for (size_t k = 0; k < ns; ++k) {
-      const Path& p = paths[k];
-      if (!p.alive) continue;
-      const vec3 albedo = S.albedo[size_t(p.mesh)];
-      for (const Light& light : S.lights) {
-        vec3 wi;
-        float dist = kInfinity, falloff = 1.0f;
-        if (light.type == Light::Type::Directional) {
-          wi = -glm::normalize(light.direction);
-        } else {
-          wi = light.position - p.pos;
-          dist = glm::length(wi);
-          if (!(dist > 0)) continue;
-          wi /= dist;
-          falloff = 1.0f / (dist * dist);
-        }
-        const float cosTheta = glm::dot(p.geo, wi);
-        if (cosTheta <= 0) continue;
-        shadows.push_back({k, albedo * light.intensity * (cosTheta * falloff / kPi)});
-        queue.push_back(toGpu(Ray{p.pos + spawnEps(p.pos) * p.geo, wi, 0.0f, dist * (1.0f - 1e-4f)}));
-      }
-    }
-    if (!queue.empty()) {
-      const std::vector<HitGpu> occ = B.trace("shadow", queue, true);
-      for (size_t q = 0; q < shadows.size(); ++q)
-        if (occ[q].mesh < 0) paths[shadows[q].path].L += paths[shadows[q].path].beta * shadows[q].contribution;
-    }
-    owner.clear();
-    queue.clear();
-    for (size_t k = 0; k < ns; ++k) {
-      Path& p = paths[k];
-      if (!p.alive) continue;
-      if (depth + 1 >= S.maxDepth) {
-        p.alive = false;
-        continue;
-      }
-      p.beta *= S.albedo[size_t(p.mesh)];
-      if (depth >= 3) {
-        const float q = std::min(0.95f, std::max({p.beta.x, p.beta.y, p.beta.z}));
-        if (p.rng.uniform() >= q) {
-          p.alive = false;
-          continue;
-        }
-        p.beta /= q;
-      }
-      const vec3 d = cosineSample(p.geo, p.rng);
-      if (glm::dot(d, p.geo) <= 0) {
-        p.alive = false;
-        continue;
-      }
-      owner.push_back(k);
-      queue.push_back(toGpu(Ray{spawnOrigin(p.pos, p.geo, d), d, 0.0f, kInfinity}));
-    }
-    if (queue.empty()) break;
-    const std::vector<HitGpu> bh = B.trace("bounce", queue, false);
-    for (size_t q = 0; q < queue.size(); ++q) {
-      Path& p = paths[owner[q]];
-      if (bh[q].mesh < 0) {
-        p.L += p.beta * S.sky;
-        p.alive = false;
-        continue;
-      }
-      const Ray r = fromGpu(queue[q]);
-      p.geo = glm::dot(bh[q].ng, r.d) > 0 ? -bh[q].ng : bh[q].ng;
-      p.pos = r.at(bh[q].t);
-      p.mesh = bh[q].mesh;
-    }
-  }
-  vec3 mean(0.0f);
-  for (const Path& p : paths) mean += p.L;
-  return mean / float(std::max<size_t>(ns, 1));
-}
 
 struct Options {
   std::string file, out, hitsOut, raysOut, checksumOf, size, integrator = "primary";
@@ -226,15 +188,17 @@ int run(const Options& o) {
   BakedScene S = readBake(o.file);
   const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  // Camera rays (vulkan_render.cpp's: sample 0 through the pixel centre, the others
-  // jittered by the pixel sample's PCG32), or the baked ray list.
-  std::vector<RayGpu> camera;
+  // Camera rays (oblong render's: render/integrator.h, cameraSample), or the baked ray
+  // list (ray k with the stream of pixel k's sample 0).
+  std::vector<Ray> camera;
   std::vector<Rng> rngs;
   ivec2 image = S.image;
   const bool useBaked = !S.rays.empty() && o.rays == 0 && o.size.empty();
   if (useBaked) {
-    camera = S.rays;
-    for (size_t k = 0; k < camera.size(); ++k) rngs.emplace_back(o.seed * 0x9E3779B97F4A7C15ULL + k, 0);
+    for (size_t k = 0; k < S.rays.size(); ++k) {
+      camera.push_back(fromGpu(S.rays[k]));
+      rngs.emplace_back(pixelSeed(o.seed, k), 0);
+    }
     image = ivec2(0);
   } else {
     if (!o.size.empty()) {
@@ -253,20 +217,15 @@ int run(const Options& o) {
       image.x = std::max(1, int(std::ceil(pixels / image.y)));
     }
     const PinholeCamera cam(S.camera, image);
-    camera.reserve(size_t(n));
-    for (int64_t k = 0; k < n; ++k) {
-      const int64_t px = k / o.spp, s = k % o.spp;
-      const int x = int(px % image.x), y = int(px / image.x);
-      Rng rng(o.seed * 0x9E3779B97F4A7C15ULL + uint64_t(px), uint64_t(s));
-      const float jx = s == 0 ? 0.5f : rng.uniform(), jy = s == 0 ? 0.5f : rng.uniform();
-      camera.push_back(toGpu(cam.generate(x + jx, y + jy)));
-      rngs.push_back(rng);
-    }
+    camera.resize(size_t(n));
+    rngs.resize(size_t(n));
+    for (int64_t k = 0; k < n; ++k)
+      camera[size_t(k)] = cameraSample(cam, image.x, o.seed, size_t(k / o.spp), int(k % o.spp), rngs[size_t(k)]);
   }
   if (!o.raysOut.empty()) {  // rays_io.h's .bin: 8 float32 a ray
     std::vector<float> bin;
     bin.reserve(camera.size() * 8);
-    for (const RayGpu& r : camera) bin.insert(bin.end(), {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax});
+    for (const Ray& r : camera) bin.insert(bin.end(), {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax});
     writeFile(o.raysOut, bin.data(), bin.size() * sizeof(float));
   }
   if (o.noTrace) {
@@ -282,24 +241,43 @@ int run(const Options& o) {
   eprint("oblong_vkbench: {} on {} ({}): {} base triangles, {} camera rays, built in {:.2f} s\n", o.file,
              runner.deviceName(), runner.driverInfo(), baseTriangles, camera.size(), buildSeconds);
 
-  Bench B{runner, 0, {}};
-  std::vector<HitGpu> first;
-  std::vector<CountersGpu> counters;
+  // `oblong render`'s integrator with micro-triangle normals (the renderer's default):
+  // primary traces the camera rays only; path adds per bounce one shadow pass (one ray
+  // per light at every vertex) and one bounce pass. The first repeat counts the work.
+  IntegratorSettings set;
+  set.integrator = o.integrator == "path" ? Integrator::Path : Integrator::Primary;
+  set.maxDepth = S.maxDepth;
+  set.sky = S.sky;
+  set.lights = S.lights;
+  set.albedo = S.albedo;
+  Bench B(runner, geometry, baseTriangles, buildSeconds);
+  std::vector<Hit> first;
+  RayCounters counters;
   bool deterministic = true;
   vec3 radiance(0.0f);
   for (B.repeat = 0; B.repeat < o.repeat; ++B.repeat) {
-    std::vector<HitGpu> hits = B.trace("camera", camera, false, B.repeat == 0 ? &counters : nullptr);
-    if (o.integrator == "path") radiance = tracePaths(B, S, camera, hits, rngs);
-    if (B.repeat == 0)
-      first = std::move(hits);
-    else
-      deterministic = deterministic && std::memcmp(first.data(), hits.data(), hits.size() * sizeof(HitGpu)) == 0;
+    SampleBatch batch;
+    batch.camera = camera;
+    batch.rng = rngs;
+    set.counters = B.repeat == 0;
+    integrate(B, set, microNormals, batch);
+    if (set.integrator == Integrator::Path) {
+      radiance = vec3(0.0f);
+      for (const vec3& v : batch.value) radiance += v;
+      radiance /= float(std::max<size_t>(batch.value.size(), 1));
+    }
+    if (B.repeat == 0) {
+      first = std::move(batch.hit);
+      for (const RayCounters& c : batch.work) counters += c;
+    } else {
+      deterministic = deterministic && sameHits(first, batch.hit);
+    }
   }
   const std::string csv = hitsCsv(first);
   const std::string checksum = hex(checksum64(csv.data(), csv.size()));
   if (!o.hitsOut.empty()) writeFile(o.hitsOut, csv.data(), csv.size());
   int64_t found = 0;
-  for (const HitGpu& h : first) found += h.mesh >= 0;
+  for (const Hit& h : first) found += h.valid();
 
   nlohmann::json j;
   j["file"] = o.file;
@@ -307,8 +285,8 @@ int run(const Options& o) {
   j["baked_by"] = S.version;
   j["geometry"] = geometry;
   j["base_triangles"] = baseTriangles;
-  j["device"] = {{"api", "vulkan"}, {"name", runner.deviceName()}, {"driver", runner.driverInfo()}};
-  for (const auto& [name, bytes] : runner.memory()) j["device"]["memory"][name] = bytes;
+  j["device"] = B.device();
+  addMemoryJson(j, B.memory());
   j["integrator"] = o.integrator;
   j["camera_rays"] = {{"count", camera.size()}, {"source", useBaked ? "baked ray list" : "camera"},
                       {"width", image.x}, {"height", image.y}, {"spp", useBaked ? 1 : o.spp}, {"seed", o.seed}};
@@ -317,13 +295,13 @@ int run(const Options& o) {
   // Per pass and in total: GPU seconds (timestamps; -1: none) and wall seconds per repeat.
   std::vector<double> gpuTotal(size_t(o.repeat), 0), wallTotal(size_t(o.repeat), 0);
   int64_t raysPerRepeat = 0;
-  for (const Pass& p : B.passes) {
+  for (const Pass& p : B.passes()) {
     j["passes"][p.name] = {{"rays", p.rays.front()}, {"gpu_seconds", p.gpu}, {"wall_seconds", p.wall},
                            {"mrays_per_second_gpu", double(p.rays.front()) / std::max(median(p.gpu), 1e-12) * 1e-6}};
     raysPerRepeat += p.rays.front();
     for (int r = 0; r < o.repeat; ++r) gpuTotal[size_t(r)] += p.gpu[size_t(r)], wallTotal[size_t(r)] += p.wall[size_t(r)];
   }
-  const bool timestamps = !B.passes.empty() && B.passes.front().gpu.front() >= 0;
+  const bool timestamps = !B.passes().empty() && B.passes().front().gpu.front() >= 0;
   const double gpuMedian = median(gpuTotal), wallMedian = median(wallTotal);
   j["rays_per_repeat"] = raysPerRepeat;
   j["gpu_seconds_median"] = timestamps ? gpuMedian : -1.0;
@@ -338,14 +316,7 @@ int run(const Options& o) {
   j["hit_checksum"] = checksum;
   j["deterministic"] = deterministic;
   if (o.integrator == "path") j["mean_radiance"] = {radiance.x, radiance.y, radiance.z};
-  CountersGpu sum{};
-  for (const CountersGpu& c : counters) {
-    sum.prisms += c.prisms, sum.boxes += c.boxes, sum.rangeQueries += c.rangeQueries, sum.inversions += c.inversions;
-    sum.cellsMarched += c.cellsMarched, sum.microTriangles += c.microTriangles;
-  }
-  j["camera_ray_counters"] = {{"prisms", sum.prisms}, {"boxes", sum.boxes}, {"range_queries", sum.rangeQueries},
-                              {"inversions", sum.inversions}, {"cells_marched", sum.cellsMarched},
-                              {"micro_triangles", sum.microTriangles}};
+  j["camera_ray_counters"] = countersJson(counters, int64_t(camera.size()));
   if (!o.out.empty()) {
     const std::string text = j.dump(2) + "\n";
     writeFile(o.out, text.data(), text.size());

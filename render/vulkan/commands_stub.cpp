@@ -12,15 +12,7 @@ namespace {
 }
 }  // namespace
 
-int traceCommand(const Scene&, const AccelOptions&, const std::vector<Ray>&, const std::string&, const std::string&,
-                 const std::string&, const std::atomic<bool>*) {
-  noVulkan();
-}
-
-int renderCommand(const Scene&, const AccelOptions&, const RenderOptions&, const std::string&, const std::string&,
-                  const std::string&, const std::string&) {
-  noVulkan();
-}
+std::unique_ptr<TraceBackend> makeScene(const Scene&, const AccelOptions&) { noVulkan(); }
 
 int bakeCommand(const Scene&, const AccelOptions&, ivec2, const std::vector<Ray>&, const std::string&,
                 const std::string&) {

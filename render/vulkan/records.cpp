@@ -129,11 +129,11 @@ void appendTraversal(GpuRecords& R, MeshGpu& m, const Intersector& is, const Int
 
 }  // namespace
 
-GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
+GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::json* describe) {
   GpuRecords R;
+  if (describe) *describe = nlohmann::json::array();
   const TraversalConfig& cfg = opts.traversal;
-  if (opts.tessellate || !cfg.baseline.empty())
-    fail("--device vulkan", "runs the traversal only, not --baseline {}", opts.tessellate ? "tessellated" : cfg.baseline);
+  if (!cfg.baseline.empty()) fail("--device vulkan", "runs the traversal only, not --baseline {}", cfg.baseline);
   if (cfg.range != "rmip" || cfg.inverter != "newton" || cfg.splitter != "midpoint2d")
     fail("--device vulkan", "runs the canonical configuration rmip+newton+midpoint2d only (asked for {}+{}+{})",
          cfg.range, cfg.inverter, cfg.splitter);
@@ -175,6 +175,11 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts) {
     for (size_t ti = 0; ti < dts.size(); ++ti) dts[ti] = mesh.triangle(ti);
     const auto is = createIntersector(cfg, dts, d);
     R.geometryName = is->name();
+    if (describe) {
+      nlohmann::json j = is->describe();
+      j["mesh"] = int(mi);
+      describe->push_back(std::move(j));
+    }
     m.displaced = 1;
     m.scale = d.scale, m.bias = d.bias, m.tiling = d.tiling;
     m.marchingScale = cfg.marchingScale;

@@ -8,7 +8,9 @@
 
 #include "core/memory.h"
 #include "core/scene.h"
+#include "render/cone_lod.h"
 #include "render/embree_scene.h"
+#include "render/trace_backend.h"
 #include "render/vulkan/records.h"
 
 #include <memory>
@@ -22,9 +24,12 @@ class Runner;
 // The records of every mesh, built with the CPU's own code (createIntersector). Throws
 // oblong::Error with one line when the configuration is not the canonical one
 // (rmip + newton + midpoint2d, no baseline) or the maps exceed the 32-bit offsets.
-GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts);
+// `describe`, when given, gets each displaced mesh's Intersector::describe() ("mesh":
+// its index), as EmbreeScene::describe() gives them.
+GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::json* describe = nullptr);
 
-class VulkanScene {
+// The Vulkan trace backend (render/trace_backend.h): one batch at a time (one queue).
+class VulkanScene : public TraceBackend {
  public:
   // Throws oblong::Error with one line when no Vulkan device supports ray tracing, when
   // the configuration is not the canonical one (rmip + newton + midpoint2d, no
@@ -39,18 +44,37 @@ class VulkanScene {
   // anyHit: occlusion rays, the traversal stops at the first prism or triangle that
   // reports a hit (valid() then means occluded; t, mesh and uv are of that hit).
   std::vector<Hit> trace(const std::vector<Ray>& rays, std::vector<RayCounters>* counters = nullptr,
-                         double* seconds = nullptr, bool anyHit = false);
+                         double* seconds = nullptr, bool anyHit = false) const;
+
+  // TraceBackend: trace() into the caller's buffers.
+  double traceHits(RayKind kind, std::span<const Ray> rays, std::span<Hit> hits,
+                   std::span<RayCounters> counters) const override;
+  double traceOcclusion(RayKind kind, std::span<const Ray> rays, std::span<uint8_t> blocked,
+                        std::span<RayCounters> counters) const override;
+  bool concurrent() const override { return false; }
+  // The CPU's rule (ConeLod) for a camera ray's λ, as EmbreeScene::coneLod.
+  float coneLod(const Ray& r, const RayCone& c, float bias) const override {
+    return cone_ ? cone_->lod(r, c, bias) : 0.0f;
+  }
 
   std::string deviceName() const;   // e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   std::string driverInfo() const;   // e.g. "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"
-  std::string geometryName() const { return geometryName_; }
-  MemoryReport memory() const;
-  double buildSeconds() const { return buildSeconds_; }
-  size_t baseTriangles() const { return baseTriangles_; }
+  std::string geometryName() const override { return geometryName_; }
+  MemoryReport memory() const override;
+  double buildSeconds() const override { return buildSeconds_; }
+  size_t baseTriangles() const override { return baseTriangles_; }
+  nlohmann::json describe() const override { return describe_; }
+  nlohmann::json device() const override;
+  std::string deviceText() const override;
 
  private:
+  // trace() on n rays into hits and, when not null, counters (n each).
+  double traceInto(const Ray* rays, size_t n, Hit* hits, RayCounters* counters, bool anyHit) const;
+
   std::unique_ptr<Runner> run_;
+  std::unique_ptr<ConeLod> cone_;  // under a level of detail per ray only
   SceneReach reach_;  // render/far_rays.h
+  nlohmann::json describe_;
   std::string geometryName_;
   double buildSeconds_ = 0;
   size_t baseTriangles_ = 0;
