@@ -58,6 +58,7 @@ OBLONG_STAT_COUNTER("traversal/IllPosedTriangles", travIllPosed);
 OBLONG_STAT_COUNTER("traversal/RejectedInversions", travBadInversions);
 OBLONG_STAT_COUNTER("traversal/StackOverflows", travOverflows);
 OBLONG_STAT_COUNTER("traversal/MarchStops", travMarchStops);  // marching ended by the closest hit
+OBLONG_STAT_COUNTER("traversal/WideLeaves", travWideLeaves);  // leaves subdivided as boxes (wide ε)
 
 // The counters of one intersect() call, flushed to RayCounters and the statistics once.
 inline void flushCounters(const RayCounters& local, bool hit, RayCounters& c) {
@@ -118,11 +119,14 @@ class RayPatch final : public SplitContext {
         ray_(ray),
         counters_(counters),
         frame_(mesh.frames[prim]),
+        tex_(mesh.texFrames[prim]),
         blend_(mesh.disp.blendOf(ray.lod)),
         watertightRay_(rc.wt),
         origin_(rc.o),
         dir_(rc.d),
-        invDir_(rc.invD) {
+        invDir_(rc.invD),
+        originT_(tex_.rot(rc.o)),
+        invDirT_(1.0 / tex_.rot(rc.d)) {
     const CellRange& cr = mesh.cells[prim];
     cellLo_ = ivec2(cr.x0, cr.y0) - frame_.origin;
     cellHi_ = ivec2(cr.x1, cr.y1) - frame_.origin;
@@ -141,6 +145,12 @@ class RayPatch final : public SplitContext {
     // Slack for comparing float hit distances with double interval ends.
     tSlackAbs_ = OBLONG_TRAV_T_ABS_PADS * boxPad_ / rc.lenD;
     dilation_ = shell_.eps + shell_.kxy * (OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr);
+    const double maxDil = std::max(dilation_.x, dilation_.y);
+    wideEps_ = 2.0 * maxDil > opt_.marchingScale;
+    leafScale_ = wideEps_ ? std::max(double(opt_.marchingScale), OBLONG_TRAV_WIDE_LEAF_EPS * maxDil) : opt_.marchingScale;
+    const double ab = std::abs(shell_.a) + std::abs(shell_.b);
+    texPad_ = TextureFrame::pad(boxPad_, maxO + maxAbsVertex(tri_) + ab);
+    texPrismBox_ = pre ? mesh.texPrismBox(prim, mesh.budgetPad[prim], budget) : mesh.texPrismBox(prim, boxPad_, maxO);
     if (pre) {
       prism_ = &mesh.prisms[prim];
       prismBox_ = mesh.prismBoxes[prim];
@@ -331,23 +341,38 @@ class RayPatch final : public SplitContext {
   }
 
   // Ray interval [t0, t1] (clipped in place) through the box of the micro-geometry over
-  // local cells [clo, chi]. False when empty.
+  // local cells [clo, chi] with heights h, in T's texture frame. False when empty.
+  bool clipToBox(const ivec2& clo, const ivec2& chi, const Interval& h, double& t0, double& t1) {
+    const dvec2 lo = glm::max(dvec2(clo), uvBoxLo_), hi = glm::min(dvec2(chi + 1), uvBoxHi_);
+    BoxD box = boxOverRect(tex_, double(tri_.minNormalLength), lo, hi, h.lo, h.hi, texPad_);
+    box = box.intersect(texPrismBox_);
+    if (box.isEmpty()) return false;
+    box.clip(originT_, invDirT_, t0, t1);
+    return t0 <= t1;
+  }
+  // The same with the heights of the RangeQuery over the cells.
   bool clipToCells(const ivec2& clo, const ivec2& chi, double& t0, double& t1) {
     const SampleRange sr{clo.x + frame_.origin.x, clo.y + frame_.origin.y, chi.x + 1 + frame_.origin.x,
                          chi.y + 1 + frame_.origin.y};
     ++counters_.rangeQueries;
-    const Interval h = disp_.toHeight(detail::rawRange(rq_, sr));
-    const dvec2 lo = glm::max(dvec2(clo), uvBoxLo_), hi = glm::min(dvec2(chi + 1), uvBoxHi_);
-    BoxD box = boxOverRect(frame_, double(tri_.minNormalLength), lo, hi, h.lo, h.hi, boxPad_);
-    box = box.intersect(prismBox_);
     ++counters_.boxes;
-    if (box.isEmpty()) return false;
-    box.clip(origin_, invDir_, t0, t1);
-    return t0 <= t1;
+    return clipToBox(clo, chi, disp_.toHeight(detail::rawRange(rq_, sr)), t0, t1);
   }
 
+  // One step of the march: a cell, rejected by its box or tested.
   void testCell(int i, int j) {
     ++counters_.cellsMarched;
+    const int I = i + frame_.origin.x, J = j + frame_.origin.y;
+    // The leaf test of TFDM before the micro-triangles: the box over the cell from its
+    // four corner samples, which bound every micro-vertex of the cell (clipped ones are
+    // interpolated along its edges; docs/design.md invariant 2).
+    {
+      const float a = disp_.raw(I, J, blend_), b = disp_.raw(I + 1, J, blend_);
+      const float c = disp_.raw(I, J + 1, blend_), e = disp_.raw(I + 1, J + 1, blend_);
+      double t0 = ray_.tmin - slack(ray_.tmin), t1 = bestLimit();
+      if (!clipToBox(ivec2(i, j), ivec2(i, j), disp_.toHeight({std::min({a, b, c, e}), std::max({a, b, c, e})}), t0, t1))
+        return;
+    }
     MicroTriangle buf[MicroCells::kMaxPerCell];
     if (!cacheReady_) {  // first cell of this ray and triangle
       new (&cache_) GridVertexCache;
@@ -357,7 +382,6 @@ class RayPatch final : public SplitContext {
       new (&mcRaw_) MicroCells(tri_, disp_, blend_);
       cellsReady_ = true;
     }
-    const int I = i + frame_.origin.x, J = j + frame_.origin.y;
     const MicroVertex* q[4];
     if (cells().interiorCorners(I, J, cache(), q)) {  // most cells: two triangles, no copies
       counters_.microTriangles += 2;
@@ -493,18 +517,32 @@ class RayPatch final : public SplitContext {
     }
   }
 
+  // A piece too small to split: marched, unless ε (float rounding at a fine texel: many
+  // texels at extreme tiling) makes its neighbourhood wider than the marching scale;
+  // then its cells are subdivided as boxes, which prune across the curve where the march
+  // would test every cell within ε of it. Such pieces stop splitting at a few ε
+  // (leafScale_): neighbourhoods of pieces much shorter than ε would overlap, and their
+  // cells be tested again and again.
+  void leaf(const CurvePiece& p) {
+    if (!wideEps_) return march(p);
+    OBLONG_STAT_INC(travWideLeaves);
+    ivec2 clo, chi;
+    if (!snap(p.lo() - dilation_, p.hi() + dilation_, clo, chi)) return;
+    pushBox(clo, chi, p.a.t, std::min(p.b.t, bestLimit()));
+  }
+
   template <typename Split>
   void processPiece(CurvePiece p, const Split& splitter) {
     if (p.a.t > bestLimit()) return;
     dvec2 ext = p.hi() - p.lo();
-    const double ms = opt_.marchingScale;
+    const double ms = leafScale_;
     // Pads that dominate the rectangle cannot be split away: march.
     const dvec2 pads = p.a.pad + p.b.pad;
     auto small = [&] {
       const int la = ext.x >= ext.y ? 0 : 1;
       return ext[la] <= ms || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
     };
-    if (small()) return march(p);
+    if (small()) return leaf(p);
     ivec2 clo, chi;
     if (!snap(p.lo() - dilation_, p.hi() + dilation_, clo, chi)) return;
     double t0 = p.a.t, t1 = std::min(p.b.t, bestLimit());
@@ -518,12 +556,12 @@ class RayPatch final : public SplitContext {
       if (t0 > p.a.t + minGain && (pointBetween(p.a, p.b, t0, m) || invertAt(t0, m))) p.a = m;
       if (t1 < p.b.t - minGain && (pointBetween(p.a, p.b, t1, m) || invertAt(t1, m))) p.b = m;
       ext = p.hi() - p.lo();
-      if (small()) return march(p);
+      if (small()) return leaf(p);
     }
     CurvePiece front, back;
     if (stackSize_ + 2 > kStack) {
       OBLONG_STAT_INC(travOverflows);
-      return march(p);  // correct, just not hierarchical
+      return march(p);  // correct, just not hierarchical (a box would need a slot too)
     }
     if (!detail::split(splitter, p, *this, front, back)) {
       OBLONG_STAT_INC(travBoxOnly);
@@ -588,14 +626,20 @@ class RayPatch final : public SplitContext {
   const Ray& ray_;
   RayCounters& counters_;
   const LocalFrame& frame_;  // P, N, barycentrics over local sample coordinates
+  const TextureFrame& tex_;  // the boxes' frame
   const float blend_;        // the ray's level-of-detail blend (Displacement::blendOf)
   const WatertightRay watertightRay_;
   // The ray in double, and what it needs per triangle.
   const dvec3 origin_, dir_, invDir_;
+  const dvec3 originT_, invDirT_;  // in the texture frame
+  double texPad_ = 0;              // boxPad_ in the texture frame
+  BoxD texPrismBox_;               // the exact prism's box in the texture frame, padded
   ivec2 cellLo_, cellHi_;    // the triangle's cells, local sample coordinates
   dvec2 uvBoxLo_, uvBoxHi_;  // the triangle's uv box, local sample coordinates
   double boxPad_ = 0, tSlackAbs_ = 0;
   dvec2 dilation_{0.0};      // ε: cells within it of the curve are marched
+  bool wideEps_ = false;     // ε wider than the marching scale: leaves are boxes (leaf())
+  double leafScale_ = 0;     // pieces up to this many texels are leaves
   const Prism* prism_ = nullptr;  // inflated prism: precomputed, or ownPrism_ for far origins
   Prism ownPrism_;
   BoxD prismBox_, inflatedBox_;

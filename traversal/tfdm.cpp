@@ -25,6 +25,7 @@
 #include "core/stats.h"
 #include "traversal/closest_hit.h"
 #include "traversal/rect_bounds.h"
+#include "traversal/texture_frame.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -167,29 +168,6 @@ struct Roots {
   }
 };
 
-// T's texture frame: an orthonormal basis with the map's u direction (PX) first and the
-// face normal last, and T's P and N (LocalFrame's Pc, PX, PY, Nc, NX, NY) expressed in
-// it. boxOverRect on it bounds the same micro-geometry (the interval arithmetic holds in
-// any orthonormal basis, and |N| is unchanged), with boxes aligned to the node's sides
-// and to the base surface instead of to the world's axes.
-struct TextureFrame {
-  dvec3 axis[3]{dvec3(1, 0, 0), dvec3(0, 1, 0), dvec3(0, 0, 1)};
-  dvec3 Pc{0.0}, PX{0.0}, PY{0.0}, Nc{0.0}, NX{0.0}, NY{0.0};
-  dvec3 rot(const dvec3& v) const { return {glm::dot(axis[0], v), glm::dot(axis[1], v), glm::dot(axis[2], v)}; }
-  static TextureFrame make(const LocalFrame& F, const DisplacedTriangle& T, bool world) {
-    TextureFrame t;
-    const dvec3 n = glm::cross(dvec3(T.p[1]) - dvec3(T.p[0]), dvec3(T.p[2]) - dvec3(T.p[0]));
-    if (!world && glm::length(n) > 0 && glm::length(F.PX) > 0) {
-      t.axis[2] = glm::normalize(n);
-      t.axis[0] = glm::normalize(F.PX - glm::dot(F.PX, t.axis[2]) * t.axis[2]);
-      t.axis[1] = glm::cross(t.axis[2], t.axis[0]);
-    }
-    t.Pc = t.rot(F.Pc), t.PX = t.rot(F.PX), t.PY = t.rot(F.PY);
-    t.Nc = t.rot(F.Nc), t.NX = t.rot(F.NX), t.NY = t.rot(F.NY);
-    return t;
-  }
-};
-
 class Tfdm final : public Intersector {
  public:
   Tfdm(TraversalMesh mesh, std::vector<Roots> roots, std::vector<TextureFrame> frames, std::unique_ptr<CellPyramid> pyr,
@@ -226,7 +204,7 @@ class Tfdm final : public Intersector {
     if (!P.valid) return false;
     const DisplacedTriangle& T = mesh_.tris[prim];
     const LocalFrame& F = mesh_.frames[prim];
-    const TextureFrame& X = texFrames_[prim];
+    const TextureFrame& X = worldBoxes_ ? texFrames_[prim] : mesh_.texFrames[prim];
     const CellRange& cr = mesh_.cells[prim];
     const Displacement& d = mesh_.disp;
     ++c.prisms;
@@ -238,7 +216,7 @@ class Tfdm final : public Intersector {
     // The ray in the boxes' frame; its rotation's rounding (and the frame's) is padded.
     const dvec3 Ob = X.rot(O), Db = X.rot(D), invDb = 1.0 / Db;
     const double boxPad =
-        m.boxPad + (worldBoxes_ ? 0.0 : OBLONG_TRAV_OBB_ROUND * (maxO + maxAbsVertex(T) + std::abs(P.a) + std::abs(P.b) + 1));
+        worldBoxes_ ? m.boxPad : TextureFrame::pad(m.boxPad, maxO + maxAbsVertex(T) + std::abs(P.a) + std::abs(P.b));
     const double tSlackAbs = OBLONG_TRAV_T_ABS_PADS * boxPad / glm::length(D);
     auto slack = [&](double t) { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tSlackAbs; };
     const dvec2 uvLo = d.toSample(T.uvBox.lo) - dvec2(F.origin), uvHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
@@ -388,9 +366,10 @@ std::unique_ptr<Intersector> makeTfdm(ParamSet& params, const BaselineContext& c
     return disp.toHeight(h);
   });
   warnSkippedTriangles(mesh, "tfdm");
-  std::vector<TextureFrame> frames(mesh.tris.size());
-  for (size_t i = 0; i < mesh.tris.size(); ++i)
-    if (mesh.params[i].valid) frames[i] = TextureFrame::make(mesh.frames[i], mesh.tris[i], world);
+  // The boxes' frame: the mesh's texture frames, or the world's axes.
+  std::vector<TextureFrame> frames(world ? mesh.tris.size() : 0);
+  for (size_t i = 0; i < frames.size(); ++i)
+    if (mesh.params[i].valid) frames[i] = TextureFrame::make(mesh.frames[i], mesh.tris[i], true);
   return std::make_unique<Tfdm>(std::move(mesh), std::move(roots), std::move(frames), std::move(pyr), top, world);
 }
 

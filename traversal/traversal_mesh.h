@@ -12,6 +12,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include "traversal/psi.h"
+#include "traversal/texture_frame.h"
 
 #include <cstring>
 #include <limits>
@@ -157,6 +158,12 @@ struct TraversalMesh {
   std::vector<BoxD> prismBoxes;     // exact prism box, padded
   std::vector<BoxD> inflatedBoxes;  // inflated prism box, padded
   std::vector<PrismOBB> obbs;       // oriented box around the inflated prism, padded
+  // T's texture frame (texture_frame.h), the frame of the boxes the traversal bounds its
+  // pieces and cells with, the exact prism's box in it (unpadded: texPrismBox pads it)
+  // and the largest coordinate of the prism's vertices (the rotation's rounding).
+  std::vector<TextureFrame> texFrames;
+  std::vector<BoxD> texPrismBoxes;
+  std::vector<double> texPrismMag;
   std::vector<double> originBudget;
   std::vector<double> budgetPad;  // RayMargins::boxPad for an origin at the budget
   Displacement disp;
@@ -216,10 +223,18 @@ struct TraversalMesh {
   size_t bytes() const {
     return tris.capacity() * sizeof(DisplacedTriangle) + params.capacity() * sizeof(PrismParams) +
            cells.capacity() * sizeof(CellRange) + frames.capacity() * sizeof(LocalFrame) +
-           prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity()) * sizeof(BoxD) +
-           (originBudget.capacity() + budgetPad.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB) +
+           prisms.capacity() * sizeof(Prism) + (prismBoxes.capacity() + inflatedBoxes.capacity() + texPrismBoxes.capacity()) * sizeof(BoxD) +
+           texFrames.capacity() * sizeof(TextureFrame) +
+           (originBudget.capacity() + budgetPad.capacity() + texPrismMag.capacity()) * sizeof(double) + obbs.capacity() * sizeof(PrismOBB) +
            (blockDelta.capacity() + rowDelta.capacity() + lastDelta.capacity()) * sizeof(float) +
            lastHeights.capacity() * sizeof(Interval);
+  }
+  // The box of triangle `prim`'s exact prism in its texture frame padded like the world
+  // box by `worldPad` (RayMargins::boxPad) for rays whose origin has max-norm up to maxO.
+  BoxD texPrismBox(size_t prim, double worldPad, double maxO) const {
+    BoxD b = texPrismBoxes[prim];
+    b.pad(TextureFrame::pad(worldPad, std::max(maxO, texPrismMag[prim])));
+    return b;
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
@@ -270,6 +285,9 @@ void TraversalMesh::build(std::vector<DisplacedTriangle> triangles, const Displa
   prismBoxes.resize(tris.size());
   inflatedBoxes.resize(tris.size());
   obbs.resize(tris.size());
+  texFrames.resize(tris.size());
+  texPrismBoxes.resize(tris.size());
+  texPrismMag.resize(tris.size());
   originBudget.assign(tris.size(), -1.0);
   budgetPad.assign(tris.size(), 0.0);
   lastHeights.assign(tris.size(), Interval{});
@@ -299,6 +317,17 @@ void TraversalMesh::buildTriangle(size_t i, Heights&& heights) {
   inflatedBoxes[i] = prisms[i].bounds();
   inflatedBoxes[i].pad(m.boxPad);
   obbs[i] = PrismOBB::around(prisms[i], T, m.boxPad);
+  texFrames[i] = TextureFrame::make(frames[i], T);
+  const Prism exact = Prism::exact(T, params[i].a, params[i].b);
+  BoxD tb;
+  double mag = 0;
+  for (int k = 0; k < 6; ++k) {
+    const dvec3 v = exact.vertex(k % 3, k >= 3);
+    tb.extend(texFrames[i].rot(v));
+    mag = std::max({mag, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  }
+  texPrismBoxes[i] = tb;
+  texPrismMag[i] = mag;
 }
 
 template <typename Heights>

@@ -99,6 +99,10 @@
 // cell by cell instead of split.
 #define OBLONG_TRAV_MIN_BOX_CELLS 1
 
+// Where ε exceeds half the marching scale (float rounding at extreme tiling), pieces up to
+// this many ε (samples) are leaves, subdivided as boxes (RayPatch::leaf).
+#define OBLONG_TRAV_WIDE_LEAF_EPS 4.0
+
 // ---- Newton (inversion/newton.h), float arithmetic as the traversal calls it -------------
 
 // Step tolerance: converged when max(|du|, |dv|) <= tol and |ds| <= tol · (L + |s|)

@@ -95,6 +95,12 @@ struct TriGpu {
   dvec2 kb, kxy, eps;       // PrismParams: residual bounds and the cell dilation ε
   double vertexErr, a, b, budget, budgetPad, maxP, minNormalLength;  // budgetPad: TraversalMesh::budgetPad
   double inflateB, inflateS, ks, domainB, domainS0, domainS1;
+  // TraversalMesh::texFrames (the boxes' frame: axes, and P and N in it),
+  // texPrismBoxes (unpadded) and texPrismMag.
+  dvec3 texAxis[3];
+  dvec3 tPc, tPX, tPY, tNc, tNX, tNY;
+  dvec3 texBoxLo, texBoxHi;
+  double texMag, pad2;
   vec3 p[3], n[3];          // DisplacedTriangle (float, as MicroCells reads it)
   vec2 t[3];
   vec4 uvToBary;            // glm::mat2 columns: m[0][0], m[0][1], m[1][0], m[1][1]

@@ -109,7 +109,7 @@ std::vector<Config> configs() {
   driver.traversal.inversionInTraversal = false;
   driver.traversal.marchingScale = 1.0f;
   c.push_back({"driver_mipmap", driver});
-  for (float ms : {1.0f, 2.0f}) {  // the marching scale against grazing rays
+  for (float ms : {1.0f, 2.0f, 8.0f}) {  // the marching scale against grazing rays
     AccelOptions o;
     o.traversal.marchingScale = ms;
     c.push_back({fmt::format("canonical_march{}", ms), o});

@@ -20,7 +20,7 @@ namespace oblong::vk {
 using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
-static_assert(sizeof(TriGpu) == 1192 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
+static_assert(sizeof(TriGpu) == 1472 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
 static_assert(sizeof(MeshGpu) == 152 && sizeof(PushGpu) == 16);
 
 namespace {
@@ -63,6 +63,11 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   g.maxP = maxAbsVertex(T), g.minNormalLength = T.minNormalLength;
   g.inflateB = P.inflateB, g.inflateS = P.inflateS, g.ks = P.ks;
   g.domainB = P.domainB, g.domainS0 = P.domainS0, g.domainS1 = P.domainS1;
+  const TextureFrame& X = tm.texFrames[i];
+  for (int k = 0; k < 3; ++k) g.texAxis[k] = X.axis[k];
+  g.tPc = X.Pc, g.tPX = X.PX, g.tPY = X.PY, g.tNc = X.Nc, g.tNX = X.NX, g.tNY = X.NY;
+  g.texBoxLo = tm.texPrismBoxes[i].lo, g.texBoxHi = tm.texPrismBoxes[i].hi;
+  g.texMag = tm.texPrismMag[i];
   for (int k = 0; k < 3; ++k) g.p[k] = T.p[k], g.n[k] = T.n[k], g.t[k] = T.t[k];
   const glm::mat2& M = T.uvToBary;
   g.uvToBary = vec4(M[0][0], M[0][1], M[1][0], M[1][1]);

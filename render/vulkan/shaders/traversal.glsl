@@ -38,6 +38,11 @@ ClaimBounds g_claim;  // TRI's bounds on the claims' errors (makePoint)
 float g_tmin, g_tmax;             // the ray's [tmin, tmax] (float, as Ray)
 dvec3 g_O, g_D, g_invD;
 dvec3 g_boxLo, g_boxHi;           // prismBox_
+dvec3 g_Ot, g_invDt;              // the ray in the texture frame (originT_, invDirT_)
+dvec3 g_texLo, g_texHi;           // texPrismBox_
+double g_texPad;                  // texPad_
+bool g_wideEps;                   // wideEps_
+double g_leafScale;               // leafScale_
 double g_boxPad, g_tAbs;
 dvec2 g_dvd;
 ivec2 g_cellLo, g_cellHi;
@@ -171,25 +176,36 @@ double bestLimit() { return g_found ? double(g_hitT) + slack(double(g_hitT)) : d
 
 dvec2 dirLocal() { return approxDirLocal(g_F, TRI.N13, g_D); }
 
-// clipToCells: the ray interval through the box of the micro-geometry over local cells.
+// clipToBox: the ray interval through the box of the micro-geometry over local cells
+// with heights h (toHeight), in T's texture frame; clipToCells: with the range query's.
+bool clipToBox(ivec2 clo, ivec2 chi, vec2 h, inout double t0, inout double t1) {
+  dvec2 lo = max(dvec2(clo), g_sbLo), hi = min(dvec2(chi + 1), g_sbHi);
+  dvec3 blo, bhi;
+  boxOverRect(TRI.tPc, TRI.tPX, TRI.tPY, TRI.tNc, TRI.tNX, TRI.tNY, double(TRI.minNormalLength), lo, hi, double(h.x), double(h.y), g_texPad, blo, bhi);
+  blo = max(blo, g_texLo);
+  bhi = min(bhi, g_texHi);
+  if (blo.x > bhi.x || blo.y > bhi.y || blo.z > bhi.z) return false;
+  clipBox(blo, bhi, g_Ot, g_invDt, t0, t1);
+  return t0 <= t1;
+}
 bool clipToCells(ivec2 clo, ivec2 chi, inout double t0, inout double t1) {
   ivec2 o = TRI.origin;
   ++g_rangeQueries;
-  vec2 h = toHeight(rangeRaw(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
-  dvec2 lo = max(dvec2(clo), g_sbLo), hi = min(dvec2(chi + 1), g_sbHi);
-  dvec3 blo, bhi;
-  boxOverRect(TRI.Pc, TRI.PX, TRI.PY, TRI.Nc, TRI.NX, TRI.NY, double(TRI.minNormalLength), lo, hi, double(h.x), double(h.y), g_boxPad, blo, bhi);
-  blo = max(blo, g_boxLo);
-  bhi = min(bhi, g_boxHi);
   ++g_boxes;
-  if (blo.x > bhi.x || blo.y > bhi.y || blo.z > bhi.z) return false;
-  clipBox(blo, bhi, g_O, g_invD, t0, t1);
-  return t0 <= t1;
+  vec2 h = toHeight(rangeRaw(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
+  return clipToBox(clo, chi, h, t0, t1);
 }
 
+// One step of the march: a cell, rejected by its box (TFDM's leaf test: the four corner
+// samples bound every micro-vertex of the cell) or tested.
 void testCell(int i, int j) {
   ++g_cells;
-  g_microTris += microCell(i + TRI.origin.x, j + TRI.origin.y);
+  int I = i + TRI.origin.x, J = j + TRI.origin.y;
+  float a = mapAt(I, J), b = mapAt(I + 1, J), c = mapAt(I, J + 1), e = mapAt(I + 1, J + 1);
+  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = bestLimit();
+  vec2 h = toHeight(vec2(minCpp(minCpp(minCpp(a, b), c), e), maxCpp(maxCpp(maxCpp(a, b), c), e)));
+  if (!clipToBox(ivec2(i, j), ivec2(i, j), h, t0, t1)) return;
+  g_microTris += microCell(I, J);
 }
 
 
@@ -670,17 +686,29 @@ bool pieceSmall(CurvePoint a, CurvePoint b) {
   dvec2 ext = pieceHi(a, b) - pieceLo(a, b);
   dvec2 pads = a.pad + b.pad;
   int la = ext.x >= ext.y ? 0 : 1;
-  return ext[la] <= double(g_mesh.marchingScale) || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
+  return ext[la] <= g_leafScale || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
 }
 bool strictlyBetween(CurvePoint a, CurvePoint b, int axis, double c) {
   double x0 = min(a.uv[axis], b.uv[axis]), x1 = max(a.uv[axis], b.uv[axis]);
   return c > x0 && c < x1;
 }
 
+// RayPatch::leaf: a piece too small to split is marched, or, where ε is wider than the
+// marching scale, subdivided as a box.
+void leafPiece(CurvePoint a, CurvePoint b) {
+  if (!g_wideEps) {
+    startMarch(a, b);
+    return;
+  }
+  ivec2 clo, chi;
+  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  pushBox(clo, chi, a.t, min(b.t, bestLimit()));
+}
+
 void processPiece(CurvePoint a, CurvePoint b) {
   if (a.t > bestLimit()) return;
   if (pieceSmall(a, b)) {
-    startMarch(a, b);
+    leafPiece(a, b);
     return;
   }
   ivec2 clo, chi;
@@ -704,7 +732,11 @@ void processPiece(CurvePoint a, CurvePoint b) {
       need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
       t = e == 0 ? t0 : t1;
     } else {
-      if (pieceSmall(a, b) || g_sp + 2 > OBLONG_TRAV_STACK) {  // overflow: correct, just not hierarchical
+      if (pieceSmall(a, b)) {
+        leafPiece(a, b);
+        return;
+      }
+      if (g_sp + 2 > OBLONG_TRAV_STACK) {  // overflow: correct, just not hierarchical
         startMarch(a, b);
         return;
       }
@@ -862,6 +894,9 @@ bool runPatch() {
   g_eps = TRI.eps + TRI.kxy * (double(OBLONG_TRAV_RAY_ERR_FACTOR) *
                                (OBLONG_TRAV_RAY_ERR * (TRI.maxP + max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z)) +
                                                        abs(TRI.a) + abs(TRI.b))));
+  precise double maxDil = max(g_eps.x, g_eps.y);
+  g_wideEps = 2.0 * maxDil > double(g_mesh.marchingScale);
+  g_leafScale = g_wideEps ? max(double(g_mesh.marchingScale), OBLONG_TRAV_WIDE_LEAF_EPS * maxDil) : double(g_mesh.marchingScale);
   int r = setupCurve();
   if (r == 1) setupBoxOnly();
   if (r != 0) runLoop();
@@ -945,6 +980,17 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
     g_boxLo = TRI.boxLo - dvec3(g_boxPad);
     g_boxHi = TRI.boxHi + dvec3(g_boxPad);
   }
+  // The ray and the boxes in the texture frame (RayPatch: originT_, invDirT_, texPad_,
+  // texPrismBox_; TextureFrame::pad).
+  g_Ot = dvec3(dotD(TRI.texAxis[0], g_O), dotD(TRI.texAxis[1], g_O), dotD(TRI.texAxis[2], g_O));
+  g_invDt = 1.0 / dvec3(dotD(TRI.texAxis[0], g_D), dotD(TRI.texAxis[1], g_D), dotD(TRI.texAxis[2], g_D));
+  precise double texPad = 1.75 * g_boxPad + OBLONG_TRAV_OBB_ROUND * ((maxO + TRI.maxP + (abs(TRI.a) + abs(TRI.b))) + 1.0);
+  g_texPad = texPad;
+  double tMag = pre ? TRI.budget : maxO;
+  tMag = tMag < TRI.texMag ? TRI.texMag : tMag;  // std::max
+  precise double tPad = 1.75 * (pre ? TRI.budgetPad : g_boxPad) + OBLONG_TRAV_OBB_ROUND * (tMag + 1.0);
+  g_texLo = TRI.texBoxLo - dvec3(tPad);
+  g_texHi = TRI.texBoxHi + dvec3(tPad);
   g_dvd = dvec2(1.0);
   g_wr = makeWatertightRay(o, d);
   g_found = false;
