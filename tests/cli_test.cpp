@@ -262,6 +262,7 @@ TEST_CASE("oblong trace --baseline tfdm matches both oracles, and a scene file c
     const auto j = nlohmann::json::parse(f);
     CHECK(j.at("config").at("baseline") == "tfdm");
     CHECK(j.at("memory").contains("tfdm/mipmap"));
+    CHECK(j.at("traversal").at(0).at("bits") == 16);  // the paper's TFDM stores 16-bit codes
     const auto& rc = j.at("ray_counters");
     CHECK(rc.at("steps").get<int64_t>() == rc.at("boxes").get<int64_t>() + rc.at("cells_marched").get<int64_t>());
     CHECK(rc.at("cells_marched").get<int64_t>() > 0);
@@ -280,6 +281,14 @@ TEST_CASE("oblong trace --baseline tfdm matches both oracles, and a scene file c
   CHECK_THAT(r.err, Catch::Contains("strategies.baseline") && Catch::Contains("'tfdmm'") &&
                         Catch::Contains("tessellated, tfdm)") && Catch::Contains(badScene));
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  // A bad parameter of the baseline: one line naming the scene and the parameter.
+  const std::string badBits = (dir / "bad_bits.json").string();
+  std::ofstream(badBits) << R"({"strategies": {"baseline": {"name": "tfdm", "bits": 8}},
+    "meshes": [{"shape": {"type": "torus", "segments": [8, 6]},
+                "displacement": {"map": ")" OBLONG_SOURCE_DIR R"(/scenes/maps/cobbles_256.png", "scale": 0.05}}]})";
+  r = run("trace " + badBits + " --rays " + csv + " -o " + (dir / "z.csv").string());
+  CHECK(r.status == 1);
+  CHECK(r.err == "oblong: " + badBits + ": strategies.baseline: parameter 'bits' = 8 is not 16 or 32\n");
 }
 
 TEST_CASE("oblong trace: bad ray files and flags give one clear error line", "[cli][trace][bad_input]") {

@@ -69,7 +69,9 @@ TEST_CASE("the named splitters are registered and validate their parameters",
   CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("boxes") && Catch::Contains("diagonal"));
   b.baselineParams = {{"bogus", 1}};
   CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("strategies.baseline") && Catch::Contains("bogus"));
-  b.baselineParams = {{"boxes", "world"}};
+  b.baselineParams = {{"bits", 8}};
+  CHECK_THROWS_WITH(createIntersector(b, s.tris, s.disp), Catch::Contains("parameter 'bits' = 8 is not 16 or 32"));
+  b.baselineParams = {{"boxes", "world"}, {"bits", 32}};
   CHECK_NOTHROW(createIntersector(b, s.tris, s.disp));
   b.baseline = "fixedstep";  // its step from a scene file's strategies.baseline
   b.baselineParams = {{"step", -1}};
@@ -132,6 +134,63 @@ TEST_CASE("fixedstep approximates the surface", "[traversal][fixedstep]") {
     if (ha == hb && (!ha || std::abs(a.t - b.t) < 0.01f)) ++agree;
   }
   CHECK(agree >= n * 9 / 10);
+}
+
+TEST_CASE("tfdm: 16-bit codes take half the bytes of the float mipmap and give the same hits", "[traversal][tfdm]") {
+  // A power-of-two map (every level stored) and the torus' odd one (level 0 stored, the
+  // levels above folded or answered by the float range query).
+  const Scenario pow2{"quad, 64x64 map",
+                      trianglesOf(quadMesh(1.0f, 0.0f, 3)),
+                      Displacement{std::make_shared<const HeightMap>(proceduralHeightMap(64, 64, 5)), 0.1f, -0.5f, vec2(2.0f, 3.0f)}};
+  for (const Scenario& s : {pow2, torus()}) {
+    INFO(s.name);
+    TraversalConfig c;
+    c.baseline = "bruteforce";
+    const auto bf = createIntersector(c, s.tris, s.disp);
+    c.baseline = "tfdm";
+    c.baselineParams = {{"bits", 32}};
+    const auto f32 = createIntersector(c, s.tris, s.disp);
+    c.baselineParams = nlohmann::json::object();  // the default: 16
+    const auto f16 = createIntersector(c, s.tris, s.disp);
+    CHECK(f16->describe().at("bits") == 16);
+    CHECK(f32->describe().at("bits") == 32);
+    auto mipmapBytes = [](const Intersector& is) {
+      for (const MemoryItem& m : is.memory())
+        if (m.name == "tfdm/mipmap") return m.bytes;
+      return size_t(0);
+    };
+    CHECK(mipmapBytes(*f32) > 0);
+    CHECK(mipmapBytes(*f16) * 2 == mipmapBytes(*f32));
+    // The closest hit over the triangles whose (own) prism box the ray meets, as Embree
+    // would call them, with the work counters.
+    auto trace = [](const Intersector& is, const Ray& r, TriangleHit& best, RayCounters& c) {
+      bool found = false;
+      Ray q = r;
+      for (uint32_t p = 0; p < is.size(); ++p) {
+        const AABB b = is.bounds(p);
+        if (b.isEmpty() || b.intersect(q).isEmpty()) continue;
+        TriangleHit h;
+        if (is.intersect(q, p, h, c) && h.t <= q.tmax) found = true, best = h, q.tmax = h.t;
+      }
+      return found;
+    };
+    size_t hits = 0;
+    RayCounters c16, c32;
+    for (const RayCase& rc : rayFamilies(s, *bf, 40, 31)) {
+      TriangleHit a, b;
+      const bool ha = trace(*f16, rc.r, a, c16), hb = trace(*f32, rc.r, b, c32);
+      REQUIRE(ha == hb);
+      if (!ha) continue;
+      ++hits;
+      CHECK(std::memcmp(&a.t, &b.t, sizeof(float)) == 0);
+      CHECK(std::memcmp(&a.uv, &b.uv, sizeof(vec2)) == 0);
+      CHECK(std::memcmp(&a.ng, &b.ng, sizeof(vec3)) == 0);
+    }
+    CHECK(hits > 40);
+    // Looser nodes, the same traversal: the work changes by a little.
+    CHECK(c16.boxes + c16.cellsMarched >= c32.boxes + c32.cellsMarched);
+    CHECK(c16.boxes + c16.cellsMarched <= 2 * (c32.boxes + c32.cellsMarched));
+  }
 }
 
 namespace {

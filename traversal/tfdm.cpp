@@ -1,9 +1,10 @@
 // The "tfdm" baseline: Tessellation-Free Displacement Mapping (Thonat et al. 2021) as it
 // traverses, the RMIP paper's main competitor (RMIP paper §3, §6; docs/design.md §2). Per ray and
 // displaced triangle:
-//   - a texture-space quad-tree over a min-max mipmap, descended from the coarsest nodes
-//     covering T's cells (at most 2×2 roots: the level at which T's cell range spans at
-//     most two nodes per axis);
+//   - a texture-space quad-tree over a min-max mipmap (conservative 16-bit codes per
+//     node as the paper's TFDM stores it, or floats with `bits: 32`), descended from the
+//     coarsest nodes covering T's cells (at most 2×2 roots: the level at which T's cell
+//     range spans at most two nodes per axis);
 //   - per node, a conservative box of the micro-geometry over node ∩ T's uv box from the
 //     node's [min, max] (oblong's interval bounds, rect_bounds.h: TFDM's affine
 //     arithmetic, made conservative for normalised normals), axis-aligned in T's texture
@@ -23,6 +24,7 @@
 
 #include "core/error.h"
 #include "core/stats.h"
+#include "strategies/quantize.h"
 #include "traversal/closest_hit.h"
 #include "traversal/rect_bounds.h"
 #include "traversal/texture_frame.h"
@@ -58,50 +60,39 @@ int64_t wrap64(int64_t i, int64_t n) {
 // tiling is free) while 2^L divides both sides; a node above the last stored level is
 // the union of the stored nodes it covers, or, when that is more than kMaxFold nodes
 // (maps whose sides are not powers of two), the `minmax_mipmap` range query's bound over
-// the node's samples (built only then).
+// the node's samples (built only then, in floats).
+// With 16 bits a stored node is one word of conservative codes (strategies/quantize.h),
+// as the paper's TFDM stores its mipmap: level 0 encodes the float [min, max] outward,
+// level L+1 joins the codes of level L. Codes are monotone, so the join equals encoding
+// the float union: the decoded node contains the 32-bit pyramid's node at every level.
 class CellPyramid {
  public:
   static constexpr int64_t kMaxFold = 64;
 
-  CellPyramid(const Displacement& d, int topLevel) : map_(*d.map) {
+  CellPyramid(const Displacement& d, int topLevel, int bits) : map_(*d.map), bits_(bits) {
     const int W = map_.width(), H = map_.height();
     int ls = 0;
     while (ls < topLevel && W % (2 << ls) == 0 && H % (2 << ls) == 0) ++ls;
     size_t bytes = 0;
-    for (int L = 0; L <= ls; ++L) bytes += size_t(W >> L) * size_t(H >> L) * sizeof(Interval);
+    for (int L = 0; L <= ls; ++L) bytes += size_t(W >> L) * size_t(H >> L) * nodeBytes();
     checkFits(map_.name(), "tfdm's min-max mipmap", bytes,
               "use a smaller map, or the canonical traversal (its rmip can be built at a lower resolution)",
-              fmt::format("levels 0..{} over {}x{} cells", ls, W, H));
-    levels_.resize(ls + 1);
+              fmt::format("levels 0..{} over {}x{} cells, {} bytes per node", ls, W, H, nodeBytes()));
+    if (bits_ == 16) q_ = Quantizer16::over(Quantizer16::rangeFor(map_.range()));
     dims_.resize(ls + 1);
     dims_[0] = {W, H};
-    levels_[0].resize(size_t(W) * H);
-    tbb::parallel_for(0, H, [&](int j) {
-      Interval* row = &levels_[0][size_t(j) * W];
-      for (int i = 0; i < W; ++i) {
-        const float a = map_.at(i, j), b = map_.at(i + 1, j), c = map_.at(i, j + 1), e = map_.at(i + 1, j + 1);
-        row[i] = {std::min({a, b, c, e}), std::max({a, b, c, e})};
-      }
-    });
-    for (int L = 1; L <= ls; ++L) {
-      const int w = dims_[L - 1].x / 2, h = dims_[L - 1].y / 2, pw = dims_[L - 1].x;
-      dims_[L] = {w, h};
-      levels_[L].resize(size_t(w) * h);
-      const Interval* p = levels_[L - 1].data();
-      Interval* q = levels_[L].data();
-      tbb::parallel_for(0, h, [&](int j) {
-        for (int i = 0; i < w; ++i) {
-          const Interval& a = p[size_t(2 * j) * pw + 2 * i];
-          const Interval& b = p[size_t(2 * j) * pw + 2 * i + 1];
-          const Interval& c = p[size_t(2 * j + 1) * pw + 2 * i];
-          const Interval& e = p[size_t(2 * j + 1) * pw + 2 * i + 1];
-          q[size_t(j) * w + i] = {std::min({a.lo, b.lo, c.lo, e.lo}), std::max({a.hi, b.hi, c.hi, e.hi})};
-        }
-      });
+    for (int L = 1; L <= ls; ++L) dims_[L] = {dims_[L - 1].x / 2, dims_[L - 1].y / 2};
+    if (bits_ == 16) {
+      build(codes_, [this](const Interval& v) { return q_.encode(v); }, join16);
+    } else {
+      auto join = [](const Interval& a, const Interval& b) {
+        return Interval{std::min(a.lo, b.lo), std::max(a.hi, b.hi)};
+      };
+      build(levels_, [](const Interval& v) { return v; }, join);
     }
   }
 
-  int storedTop() const { return int(levels_.size()) - 1; }
+  int storedTop() const { return int(dims_.size()) - 1; }
   // True when a node of level L is answered by folding stored nodes.
   bool folds(int L) const {
     const int s = storedTop();
@@ -111,6 +102,8 @@ class CellPyramid {
   }
   void setUpper(std::unique_ptr<RangeQuery> q) { upper_ = std::move(q); }
   const RangeQuery* upper() const { return upper_.get(); }
+  int bits() const { return bits_; }
+  const Quantizer16& quantizer() const { return q_; }
 
   // Raw [min, max] over cells [x·2^L, (x+1)·2^L) × [y·2^L, (y+1)·2^L) (absolute cell
   // indices, unwrapped).
@@ -118,19 +111,26 @@ class CellPyramid {
     const int s = storedTop();
     if (L <= s) {
       const ivec2 d = dims_[L];
-      return levels_[L][size_t(wrap64(y, d.y)) * d.x + size_t(wrap64(x, d.x))];
+      const size_t at = size_t(wrap64(y, d.y)) * d.x + size_t(wrap64(x, d.x));
+      return bits_ == 16 ? q_.decodePair(codes_[L][at]) : levels_[L][at];
     }
     if (folds(L)) {
       const int k = L - s;
       const ivec2 d = dims_[s];
       const int64_t nx = std::min<int64_t>(int64_t(1) << k, d.x), ny = std::min<int64_t>(int64_t(1) << k, d.y);
       Interval r;
+      uint32_t c = kEmpty16;  // codes are joined and decoded once
       for (int64_t j = 0; j < ny; ++j)
         for (int64_t i = 0; i < nx; ++i) {
-          const Interval& v = levels_[s][size_t(wrap64((y << k) + j, d.y)) * d.x + size_t(wrap64((x << k) + i, d.x))];
-          r.lo = std::min(r.lo, v.lo), r.hi = std::max(r.hi, v.hi);
+          const size_t at = size_t(wrap64((y << k) + j, d.y)) * d.x + size_t(wrap64((x << k) + i, d.x));
+          if (bits_ == 16) {
+            c = join16(c, codes_[s][at]);
+          } else {
+            const Interval& v = levels_[s][at];
+            r.lo = std::min(r.lo, v.lo), r.hi = std::max(r.hi, v.hi);
+          }
         }
-      return r;
+      return bits_ == 16 ? q_.decodePair(c) : r;
     }
     // Samples x·2^L .. (x+1)·2^L inclusive (the cells' far corners); clamped to int, a
     // range wider than the map is the whole map's anyway.
@@ -143,12 +143,47 @@ class CellPyramid {
   size_t bytes() const {
     size_t b = 0;
     for (const auto& l : levels_) b += l.capacity() * sizeof(Interval);
+    for (const auto& l : codes_) b += l.capacity() * sizeof(uint32_t);
     return b;
   }
 
  private:
+  size_t nodeBytes() const { return bits_ == 16 ? sizeof(uint32_t) : sizeof(Interval); }
+
+  // Fills every stored level: level 0 from the cells' corner samples through `encode`,
+  // level L+1 by `join` of 2×2 nodes of level L.
+  template <typename T, typename Encode, typename Join>
+  void build(std::vector<std::vector<T>>& levels, Encode encode, Join join) {
+    const int W = dims_[0].x, H = dims_[0].y;
+    levels.resize(dims_.size());
+    levels[0].resize(size_t(W) * H);
+    tbb::parallel_for(0, H, [&](int j) {
+      T* row = &levels[0][size_t(j) * W];
+      for (int i = 0; i < W; ++i) {
+        const float a = map_.at(i, j), b = map_.at(i + 1, j), c = map_.at(i, j + 1), e = map_.at(i + 1, j + 1);
+        row[i] = encode(Interval{std::min({a, b, c, e}), std::max({a, b, c, e})});
+      }
+    });
+    for (size_t L = 1; L < dims_.size(); ++L) {
+      const int w = dims_[L].x, h = dims_[L].y, pw = dims_[L - 1].x;
+      levels[L].resize(size_t(w) * h);
+      const T* p = levels[L - 1].data();
+      T* q = levels[L].data();
+      tbb::parallel_for(0, h, [&](int j) {
+        for (int i = 0; i < w; ++i) {
+          const T* r0 = p + size_t(2 * j) * pw + 2 * i;
+          const T* r1 = r0 + pw;
+          q[size_t(j) * w + i] = join(join(r0[0], r0[1]), join(r1[0], r1[1]));
+        }
+      });
+    }
+  }
+
   const HeightMap& map_;
-  std::vector<std::vector<Interval>> levels_;
+  int bits_;
+  Quantizer16 q_;
+  std::vector<std::vector<Interval>> levels_;  // bits 32
+  std::vector<std::vector<uint32_t>> codes_;   // bits 16
   std::vector<ivec2> dims_;
   std::unique_ptr<RangeQuery> upper_;
 };
@@ -191,12 +226,15 @@ class Tfdm final : public Intersector {
     return r;
   }
   nlohmann::json describe() const override {
-    return {{"name", "tfdm"},
+    nlohmann::json j = {{"name", "tfdm"},
             {"stored_levels", pyr_->storedTop() + 1},
             {"max_root_level", maxRootLevel_},
             {"upper_levels", pyr_->upper() ? std::string(pyr_->upper()->name()) : std::string("folded")},
             {"boxes", worldBoxes_ ? "world" : "texture"},
+            {"bits", pyr_->bits()},
             {"bounds", "prism AABB"}};
+    if (pyr_->bits() == 16) j["quantization"] = {{"base", pyr_->quantizer().base}, {"step", pyr_->quantizer().step}};
+    return j;
   }
 
   bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
@@ -337,6 +375,8 @@ std::unique_ptr<Intersector> makeTfdm(ParamSet& params, const BaselineContext& c
   if (boxFrame != "texture" && boxFrame != "world")
     fail(params.where(), "boxes must be \"texture\" or \"world\", got \"{}\"", boxFrame);
   const bool world = boxFrame == "world";
+  const int bits = params.get<int>("bits", 16);
+  if (bits != 16 && bits != 32) fail(params.where(), "parameter 'bits' = {} is not 16 or 32", bits);
   const Displacement& disp = ctx.disp;
   std::vector<DisplacedTriangle>& tris = *ctx.triangles;
   std::vector<Roots> roots(tris.size());
@@ -348,7 +388,7 @@ std::unique_ptr<Intersector> makeTfdm(ParamSet& params, const BaselineContext& c
     top = std::max(top, roots[i].level);
     boxes.push_back(tris[i].uvBox);
   }
-  auto pyr = std::make_unique<CellPyramid>(disp, top);
+  auto pyr = std::make_unique<CellPyramid>(disp, top, bits);
   if (!pyr->folds(top)) {
     ParamSet none(nlohmann::json::object(), "tfdm: upper levels");
     pyr->setUpper(createRangeQuery("minmax_mipmap", none, RangeQueryContext{disp, QueryNeeds::forRects(disp, boxes)}));

@@ -26,6 +26,7 @@ import csv
 import datetime
 import hashlib
 import json
+import math
 import os
 import platform
 import random
@@ -67,7 +68,8 @@ RANGE_PREFIXES = ("rmip/", "minmax_mipmap/", "safety_zones/", "tfdm/mipmap", "tf
 # (strategies.range.resolution = max(W, H) / divisor; divisor 1 = full resolution, the
 # canonical default). Chosen so that "normal" has about the minmax mipmap's memory
 # (the paper's "RMIP" column: x1.3-1.6 of TFDM), "low" a tenth of it or less and "high"
-# the full-resolution structure (the paper's x7.6-30).
+# the full-resolution structure (the paper's x7.6-30). table1 picks its "normal" by
+# measured bytes instead (rmip_nearest_resolution).
 RMIP_LEVELS = {"low": 16, "normal": 2, "high": 1}
 
 # The paper-scale suite (scenes/paper/, scenes/README.md): Table 1's regimes.
@@ -191,6 +193,51 @@ def png_size(path: Path) -> tuple[int, int]:
 def rmip_resolution(scene: dict, level: str) -> int:
     w, h = map_size(scene)
     return max(1, max(w, h) // RMIP_LEVELS[level])
+
+
+_BYTES: dict = {}
+
+
+def structure_bytes(ctx, scene: str, strategies: dict) -> int:
+    """range_bytes() of what `scene` (a repository scene name) builds with `strategies`:
+    a 2x2 camera-ray render with --stats, run here and now (a probe of the structure's
+    size, not a measurement: not in the run store, not in run.json)."""
+    key = (str(ctx.binary), scene, json.dumps(strategies, sort_keys=True))
+    if key in _BYTES:
+        return _BYTES[key]
+    doc = load_scene(scene_path(scene))
+    doc["strategies"] = strategies
+    path, stats = ctx.tmp("probe", "scene.json"), ctx.tmp("probe", "stats.json")
+    path.write_text(json.dumps(doc))
+    p = subprocess.run([str(ctx.binary), "render", str(path), "--integrator", "primary", "--size", "2x2", "--threads",
+                        "1", "-q", "-o", str(ctx.tmp("probe", "probe.png")), "--stats", str(stats)],
+                       capture_output=True, text=True, timeout=600)
+    if p.returncode != 0:
+        raise ExperimentError(f"{scene}: probe with {strategies} failed: {p.stderr.strip()[-500:]}")
+    _BYTES[key] = range_bytes(json.loads(stats.read_text()))
+    return _BYTES[key]
+
+
+def rmip_nearest_resolution(ctx, scene: str, target: int) -> tuple[int, int, int]:
+    """The RMIP resolution max(W, H) / 2^k whose structure's bytes are nearest `target`
+    (ratio nearest 1, in log scale): bytes fall with the divisor, so the walk starts at
+    / 2 and stops once it has bracketed the target. (resolution, divisor, bytes)."""
+    w, h = map_size(load_scene(scene_path(scene)))
+    side = max(w, h)
+
+    def at(d):
+        return structure_bytes(ctx, scene, {"range": {"name": "rmip", "resolution": max(1, side // d)}})
+    d = 2
+    if at(d) > target:
+        while at(d) > target and 2 * d <= side:
+            d *= 2
+        cands = [d // 2, d]
+    else:
+        while at(d) < target and d > 1:
+            d //= 2
+        cands = [d, 2 * d]
+    best = min(cands, key=lambda c: abs(math.log(max(1, at(c)) / max(1, target))))
+    return max(1, side // best), best, at(best)
 
 
 # ---------------------------------------------------------------------------------------
