@@ -8,6 +8,7 @@
 // the asteroid rendered on Vulkan must match the CPU render. Sized for lavapipe on a
 // 2-core machine (docs/vulkan.md; the timings and measured runs in docs/journal/vulkan.md).
 #include "core/lod.h"
+#include "core/procedural.h"
 #include "core/scene.h"
 #include "core/stats.h"
 #include "render/camera.h"
@@ -368,11 +369,11 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
   fmt::print("vulkan step parity, CPU branches reached{}: newton/Inversions {}, newton/Fallbacks (cubic) {}, "
              "traversal/RejectedInversions {}, traversal/TurningSplits {}, traversal/BoxOnlyPrisms {}, "
              "traversal/IllPosedTriangles {}, traversal/MarchStops {}, traversal/PrismGrazes {}, "
-             "traversal/StackOverflows {}\n",
+             "traversal/StackOverflows {}, traversal/WideLeaves {}\n",
              stats1.empty() ? " (statistics not compiled in)" : "", delta("newton/Inversions"),
              delta("newton/Fallbacks"), delta("traversal/RejectedInversions"), delta("traversal/TurningSplits"),
              delta("traversal/BoxOnlyPrisms"), delta("traversal/IllPosedTriangles"), delta("traversal/MarchStops"),
-             delta("traversal/PrismGrazes"), delta("traversal/StackOverflows"));
+             delta("traversal/PrismGrazes"), delta("traversal/StackOverflows"), delta("traversal/WideLeaves"));
   // The branches these families reach, held: a family change that stops reaching one
   // would leave that branch's GPU mirror unchecked. Not reached by these families (so
   // not mirrored by test): rejected inversions, prism grazes and stack overflows.
@@ -386,6 +387,76 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
     CHECK(delta("traversal/MarchStops") > 0);
   }
   CHECK(total.hits > total.rays / 10);
+}
+
+// Where ε spans texels (float rounding at a fine texel), leaves are boxes (RayPatch::leaf):
+// a branch the conformance scenarios never take, since their brute-force oracle cannot
+// afford the tiling that reaches it. The plane of tests/orientation_test.cpp's tiling
+// case, its two rays and rays from above at random angles, CPU against GPU.
+TEST_CASE("vulkan: wide eps (a plane tiled 1e3 and 1e4 times), the GPU runs the CPU's traversal step for step", "[vulkan]") {
+  vulkanTestEnv();
+  const std::map<std::string, int64_t> stats0 = Stats::snapshot();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  std::vector<float> texels(64 * 64);
+  for (float& v : texels) v = U(rng);
+  const auto map = std::make_shared<const HeightMap>(64, 64, std::move(texels));
+  const Mesh plane = planeMesh(vec2(2.0f), ivec2(1));
+  std::vector<Ray> rays = {{vec3(-1.5f, 0.005f, 0.1f), vec3(1, 0, 0), 0.0f, 100.0f},
+                           {vec3(0.1f, 1.0f, 0.2f), vec3(0, -1, 0), 0.0f, 100.0f}};
+  for (int i = 0; i < 30; ++i) {  // from above, 5 to 85 degrees off the plane
+    const float a = (5.0f + 80.0f * U(rng)) * 3.14159265f / 180.0f, phi = 6.2831853f * U(rng);
+    const vec3 target(1.8f * U(rng) - 0.9f, 0.0f, 1.8f * U(rng) - 0.9f);
+    const vec3 d(std::cos(a) * std::cos(phi), -std::sin(a), std::cos(a) * std::sin(phi));
+    rays.push_back({target - 0.5f * d, d, 0.0f, 100.0f});
+  }
+  StepParity total;
+  int printed = 0;
+  for (float tiling : {1e3f, 1e4f})
+    for (size_t ti = 0; ti < plane.triangles.size(); ++ti) {
+      const DisplacedTriangle T = plane.triangle(ti);
+      const Displacement d{map, 0.01f, 0.0f, vec2(tiling)};
+      const auto cpu = createIntersector(TraversalConfig{}, {T}, d);
+      const AABB box = cpu->bounds(0);
+      const Scene scene = oneTriangleScene(T, d);
+      vk::VulkanScene gpu(scene, AccelOptions{});
+      const SceneReach reach = sceneReach(scene);
+      std::vector<RayCounters> gw;
+      const std::vector<Hit> g = gpu.trace(rays, &gw, nullptr);
+      for (size_t i = 0; i < rays.size(); ++i) {
+        const NearRay near = nearScene(rays[i], reach);
+        const Ray& r = near.ray;
+        RayCounters cw;
+        TriangleHit h;
+        bool hit = false;
+        const bool boxSays = !box.intersect(r).isEmpty();
+        if (!near.misses && (boxSays || gw[i].prisms > 0)) hit = cpu->intersect(r, 0, h, cw) && h.t < r.tmax;
+        if (hit) h.t = unshift(h.t, near.shift);
+        StepParity one;
+        one.rays = 1;
+        one.hits = hit;
+        one.enteredPrism = cw.prisms > 0;
+        one.agree = hit == g[i].valid();
+        one.bitT = one.agree && (!hit || h.t == g[i].t);
+        one.bitAll = one.bitT && (!hit || (h.uv == g[i].uv && h.ng == g[i].ng));
+        one.sameWork = sameWork(cw, gw[i]);
+        total.add(one);
+        if ((!one.bitAll || !one.sameWork) && printed++ < 8)
+          fmt::print("vulkan wide eps, tiling {}, triangle {}, ray {}:\n  cpu:    {} t={} | {}\n  vulkan: {} t={} | {}\n",
+                     tiling, ti, i, hit ? "hit " : "miss", hit ? h.t : 0.0f, workText(cw),
+                     g[i].valid() ? "hit " : "miss", g[i].valid() ? g[i].t : 0.0f, workText(gw[i]));
+      }
+    }
+  const std::map<std::string, int64_t> stats1 = Stats::snapshot();
+  const auto wide = [&] {
+    const auto a = stats0.find("traversal/WideLeaves"), b = stats1.find("traversal/WideLeaves");
+    return (b == stats1.end() ? 0 : b->second) - (a == stats0.end() ? 0 : a->second);
+  }();
+  fmt::print("vulkan wide eps: {}; traversal/WideLeaves {}\n", total.text(), wide);
+  CHECK(total.bitAll == total.rays);
+  CHECK(total.sameWork == total.rays);
+  CHECK(total.hits > total.rays / 2);
+  if (!stats1.empty()) CHECK(wide > 0);
 }
 
 TEST_CASE("vulkan: one triangle with a lambda per ray, the GPU runs the CPU's traversal step for step", "[vulkan][lod]") {

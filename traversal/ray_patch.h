@@ -146,7 +146,7 @@ class RayPatch final : public SplitContext {
     tSlackAbs_ = OBLONG_TRAV_T_ABS_PADS * boxPad_ / rc.lenD;
     dilation_ = shell_.eps + shell_.kxy * (OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr);
     const double maxDil = std::max(dilation_.x, dilation_.y);
-    wideEps_ = 2.0 * maxDil > opt_.marchingScale;
+    wideEps_ = maxDil > OBLONG_TRAV_WIDE_EPS_REL * opt_.marchingScale;
     leafScale_ = wideEps_ ? std::max(double(opt_.marchingScale), OBLONG_TRAV_WIDE_LEAF_EPS * maxDil) : opt_.marchingScale;
     const double ab = std::abs(shell_.a) + std::abs(shell_.b);
     texPad_ = TextureFrame::pad(boxPad_, maxO + maxAbsVertex(tri_) + ab);
@@ -517,12 +517,12 @@ class RayPatch final : public SplitContext {
     }
   }
 
-  // A piece too small to split: marched, unless ε (float rounding at a fine texel: many
-  // texels at extreme tiling) makes its neighbourhood wider than the marching scale;
-  // then its cells are subdivided as boxes, which prune across the curve where the march
-  // would test every cell within ε of it. Such pieces stop splitting at a few ε
-  // (leafScale_): neighbourhoods of pieces much shorter than ε would overlap, and their
-  // cells be tested again and again.
+  // A piece too small to split: marched, unless ε (float rounding at a fine texel: a texel
+  // or more at high tiling) is wide against the marching scale; then its cells are
+  // subdivided as boxes, down to blocks of OBLONG_TRAV_WIDE_BOX_CELLS, which prune across
+  // the curve where the march would test every cell within ε of it. Such pieces stop
+  // splitting at a few ε (leafScale_): neighbourhoods of pieces much shorter than ε would
+  // overlap, and their cells be tested again and again.
   void leaf(const CurvePiece& p) {
     if (!wideEps_) return march(p);
     OBLONG_STAT_INC(travWideLeaves);
@@ -576,7 +576,8 @@ class RayPatch final : public SplitContext {
     const double limit = bestLimit();
     if (e.ta > limit) return;
     const ivec2 n = e.chi - e.clo + 1;
-    if (std::max(n.x, n.y) <= std::max(float(OBLONG_TRAV_MIN_BOX_CELLS), opt_.marchingScale))
+    const float block = wideEps_ ? std::min(float(OBLONG_TRAV_WIDE_BOX_CELLS), opt_.marchingScale) : opt_.marchingScale;
+    if (std::max(n.x, n.y) <= std::max(float(OBLONG_TRAV_MIN_BOX_CELLS), block))
       return testCells(e.clo, e.chi);
     double t0 = e.ta, t1 = std::min(e.tb, limit);
     if (!clipToCells(e.clo, e.chi, t0, t1)) return;
@@ -638,7 +639,7 @@ class RayPatch final : public SplitContext {
   dvec2 uvBoxLo_, uvBoxHi_;  // the triangle's uv box, local sample coordinates
   double boxPad_ = 0, tSlackAbs_ = 0;
   dvec2 dilation_{0.0};      // ε: cells within it of the curve are marched
-  bool wideEps_ = false;     // ε wider than the marching scale: leaves are boxes (leaf())
+  bool wideEps_ = false;     // ε wide against the marching scale: leaves are boxes (leaf())
   double leafScale_ = 0;     // pieces up to this many texels are leaves
   const Prism* prism_ = nullptr;  // inflated prism: precomputed, or ownPrism_ for far origins
   Prism ownPrism_;

@@ -774,7 +774,8 @@ void processBox(ivec2 clo, ivec2 chi, double ta, double tb) {
   double limit = bestLimit();
   if (ta > limit) return;
   ivec2 n = chi - clo + 1;
-  if (float(max(n.x, n.y)) <= max(float(OBLONG_TRAV_MIN_BOX_CELLS), g_mesh.marchingScale)) {
+  float block = g_wideEps ? min(float(OBLONG_TRAV_WIDE_BOX_CELLS), g_mesh.marchingScale) : g_mesh.marchingScale;
+  if (float(max(n.x, n.y)) <= max(float(OBLONG_TRAV_MIN_BOX_CELLS), block)) {
     startCells(clo, chi);
     return;
   }
@@ -895,7 +896,7 @@ bool runPatch() {
                                (OBLONG_TRAV_RAY_ERR * (TRI.maxP + max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z)) +
                                                        abs(TRI.a) + abs(TRI.b))));
   precise double maxDil = max(g_eps.x, g_eps.y);
-  g_wideEps = 2.0 * maxDil > double(g_mesh.marchingScale);
+  g_wideEps = maxDil > OBLONG_TRAV_WIDE_EPS_REL * double(g_mesh.marchingScale);
   g_leafScale = g_wideEps ? max(double(g_mesh.marchingScale), OBLONG_TRAV_WIDE_LEAF_EPS * maxDil) : double(g_mesh.marchingScale);
   int r = setupCurve();
   if (r == 1) setupBoxOnly();
