@@ -22,15 +22,7 @@ struct Found {
 
 // Closest hit over all triangles (world-box filtered, in index order) and the summed work.
 bool traceAll(const Intersector& is, const Ray& r, Found& best, RayCounters& c) {
-  bool found = false;
-  Ray q = r;
-  for (uint32_t p = 0; p < is.size(); ++p) {
-    const AABB b = is.bounds(p);
-    if (b.isEmpty() || b.intersect(q).isEmpty()) continue;
-    TriangleHit h;
-    if (is.intersect(q, p, h, c) && h.t <= q.tmax) found = true, best = {h, p}, q.tmax = h.t;
-  }
-  return found;
+  return test::closest(is, r, best.h, best.prim, c);
 }
 
 test::Scenario rotated(const test::Scenario& s, const glm::mat3& R) {

@@ -164,15 +164,8 @@ TEST_CASE("tfdm: 16-bit codes take half the bytes of the float mipmap and give t
     // The closest hit over the triangles whose (own) prism box the ray meets, as Embree
     // would call them, with the work counters.
     auto trace = [](const Intersector& is, const Ray& r, TriangleHit& best, RayCounters& c) {
-      bool found = false;
-      Ray q = r;
-      for (uint32_t p = 0; p < is.size(); ++p) {
-        const AABB b = is.bounds(p);
-        if (b.isEmpty() || b.intersect(q).isEmpty()) continue;
-        TriangleHit h;
-        if (is.intersect(q, p, h, c) && h.t <= q.tmax) found = true, best = h, q.tmax = h.t;
-      }
-      return found;
+      uint32_t prim;
+      return closest(is, r, best, prim, c);
     };
     size_t hits = 0;
     RayCounters c16, c32;

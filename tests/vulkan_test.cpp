@@ -230,6 +230,39 @@ struct StepParity {
   }
 };
 
+// One ray, the CPU's intersector against the GPU's report. Embree's part on the CPU: the
+// callback runs when the ray meets the prism's box, and a hit counts when strictly closer
+// than tmax (as the GPU's report). The GPU's BVH may be more conservative than this box
+// test (lavapipe hands over prisms that lie wholly before tmin): such a prism runs on the
+// CPU too, so the traversals are compared; one the box test enters and the BVH skips fails.
+struct RayParity {
+  StepParity p;
+  bool hit = false;
+  TriangleHit h;
+  RayCounters cw;
+};
+RayParity compareRay(const Intersector& cpu, const AABB& box, const NearRay& near, const Hit& g, const RayCounters& gw) {
+  RayParity out;
+  const Ray& r = near.ray;
+  const bool boxSays = !box.intersect(r).isEmpty();
+  if (!near.misses && (boxSays || gw.prisms > 0)) out.hit = cpu.intersect(r, 0, out.h, out.cw) && out.h.t < r.tmax;
+  if (out.hit) out.h.t = unshift(out.h.t, near.shift);
+  StepParity& one = out.p;
+  one.rays = 1;
+  one.hits = out.hit;
+  one.enteredPrism = out.cw.prisms > 0;
+  one.bvhExtra = !boxSays && gw.prisms > 0;
+  const bool sameHit = out.hit == g.valid();
+  double rel = 0;
+  if (sameHit && out.hit) rel = std::abs(double(out.h.t) - double(g.t)) / std::max(std::abs(double(out.h.t)), 1e-3);
+  one.maxRelT = rel;
+  one.agree = sameHit && rel <= 1e-5;
+  one.bitT = sameHit && (!out.hit || out.h.t == g.t);
+  one.bitAll = one.bitT && (!out.hit || (out.h.uv == g.uv && out.h.ng == g.ng));
+  one.sameWork = sameWork(out.cw, gw);
+  return out;
+}
+
 }  // namespace
 
 // The contract of the mirror (docs/vulkan.md "The contract"). With one displaced triangle
@@ -311,30 +344,11 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
       for (size_t i = 0; i < rays.size(); ++i) {
         const NearRay near = nearScene(rays[i], reach);
         const Ray& r = near.ray;
-        // Embree's part on the CPU: the callback runs when the ray meets the prism's box,
-        // and a hit counts when strictly closer than tmax (as the GPU's report). The GPU's
-        // BVH may be more conservative than this box test (lavapipe hands over prisms
-        // that lie wholly before tmin): such a prism runs on the CPU too, so the
-        // traversals are compared; one the box test enters and the BVH skips fails.
-        RayCounters cw;
-        TriangleHit h;
-        bool hit = false;
-        const bool boxSays = !box.intersect(r).isEmpty();
-        if (!near.misses && (boxSays || gw[i].prisms > 0)) hit = cpu->intersect(r, 0, h, cw) && h.t < r.tmax;
-        if (hit) h.t = unshift(h.t, near.shift);
-        StepParity one1;
-        one1.rays = 1;
-        one1.hits = hit;
-        one1.enteredPrism = cw.prisms > 0;
-        one1.bvhExtra = !boxSays && gw[i].prisms > 0;
-        const bool sameHit = hit == g[i].valid();
-        double rel = 0;
-        if (sameHit && hit) rel = std::abs(double(h.t) - double(g[i].t)) / std::max(std::abs(double(h.t)), 1e-3);
-        one1.maxRelT = rel;
-        one1.agree = sameHit && rel <= 1e-5;
-        one1.bitT = sameHit && (!hit || h.t == g[i].t);
-        one1.bitAll = one1.bitT && (!hit || (h.uv == g[i].uv && h.ng == g[i].ng));
-        one1.sameWork = sameWork(cw, gw[i]);
+        const RayParity rp = compareRay(*cpu, box, near, g[i], gw[i]);
+        const StepParity& one1 = rp.p;
+        const bool hit = rp.hit;
+        const TriangleHit& h = rp.h;
+        const RayCounters& cw = rp.cw;
         sp.add(one1);
         perFamily[size_t(cases[i].family)].add(one1);
         if ((!one1.agree || !one1.bitT || !one1.sameWork) && printed++ < 12)
@@ -424,22 +438,11 @@ TEST_CASE("vulkan: wide eps (a plane tiled 1e3 and 1e4 times), the GPU runs the 
       std::vector<RayCounters> gw;
       const std::vector<Hit> g = gpu.trace(rays, &gw, nullptr);
       for (size_t i = 0; i < rays.size(); ++i) {
-        const NearRay near = nearScene(rays[i], reach);
-        const Ray& r = near.ray;
-        RayCounters cw;
-        TriangleHit h;
-        bool hit = false;
-        const bool boxSays = !box.intersect(r).isEmpty();
-        if (!near.misses && (boxSays || gw[i].prisms > 0)) hit = cpu->intersect(r, 0, h, cw) && h.t < r.tmax;
-        if (hit) h.t = unshift(h.t, near.shift);
-        StepParity one;
-        one.rays = 1;
-        one.hits = hit;
-        one.enteredPrism = cw.prisms > 0;
-        one.agree = hit == g[i].valid();
-        one.bitT = one.agree && (!hit || h.t == g[i].t);
-        one.bitAll = one.bitT && (!hit || (h.uv == g[i].uv && h.ng == g[i].ng));
-        one.sameWork = sameWork(cw, gw[i]);
+        const RayParity rp = compareRay(*cpu, box, nearScene(rays[i], reach), g[i], gw[i]);
+        const StepParity& one = rp.p;
+        const bool hit = rp.hit;
+        const TriangleHit& h = rp.h;
+        const RayCounters& cw = rp.cw;
         total.add(one);
         if ((!one.bitAll || !one.sameWork) && printed++ < 8)
           fmt::print("vulkan wide eps, tiling {}, triangle {}, ray {}:\n  cpu:    {} t={} | {}\n  vulkan: {} t={} | {}\n",

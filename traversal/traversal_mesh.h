@@ -126,22 +126,6 @@ struct PrismOBB {
     return b;
   }
   bool valid() const { return lo[0] <= hi[0]; }
-  // Clips [t0, t1] to the slabs (t0 > t1 when missed). `slack` covers this ray's own
-  // rounding (relative to its origin's magnitude).
-  void clip(const dvec3& O, const dvec3& D, double slack, double& t0, double& t1) const {
-    for (int k = 0; k < kAxes && t0 <= t1; ++k) {
-      const double o = glm::dot(axis[k], O), d = glm::dot(axis[k], D);
-      const double l = lo[k] - slack, h = hi[k] + slack;
-      if (d == 0.0) {
-        if (o < l || o > h) t0 = std::numeric_limits<double>::infinity();
-        continue;
-      }
-      double a = (l - o) / d, b = (h - o) / d;
-      if (a > b) std::swap(a, b);
-      t0 = std::max(t0, a);
-      t1 = std::min(t1, b);
-    }
-  }
 };
 
 // Everything a displaced mesh's intersector shares, whatever the strategies.
@@ -239,18 +223,14 @@ struct TraversalMesh {
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
   AABB bounds(uint32_t prim) const { return params[prim].valid ? params[prim].bounds : AABB{}; }
 
-  // A cheap exact reject before any per-ray set-up: true when [tmin, tmax] (with the
-  // traversal's own slack) misses the padded boxes around the inflated prism. Only for
-  // origins within the budget; beyond it, false (the full test decides).
+  // A cheap exact reject before any per-ray set-up (core/kernels/prism.h, shared with
+  // the shaders): true when [tmin, tmax] (with the traversal's own slack) misses the
+  // padded boxes around the inflated prism. Only for origins within the budget; beyond
+  // it, false (the full test decides).
   bool missesPrism(uint32_t prim, const Ray& r, const RayConstants& rc) const {
-    if (!(rc.maxO <= originBudget[prim])) return false;
-    const double tAbs = OBLONG_TRAV_T_ABS_PADS * budgetPad[prim] / rc.lenD;
-    double t0 = r.tmin - (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmin)) + tAbs);
-    double t1 = r.tmax + (OBLONG_TRAV_SLACK_REL * std::abs(double(r.tmax)) + tAbs);
-    inflatedBoxes[prim].clip(rc.o, rc.invD, t0, t1);
-    if (!(t0 <= t1)) return true;
-    if (obbs[prim].valid()) obbs[prim].clip(rc.o, rc.d, OBLONG_TRAV_OBB_ROUND * (rc.maxO + 1), t0, t1);
-    return !(t0 <= t1);
+    const PrismOBB& b = obbs[prim];
+    return shared::missesPrism(r.tmin, r.tmax, rc.maxO, originBudget[prim], budgetPad[prim], rc.lenD, rc.o, rc.d,
+                               rc.invD, inflatedBoxes[prim].lo, inflatedBoxes[prim].hi, b.valid(), b.axis, b.lo, b.hi);
   }
 };
 

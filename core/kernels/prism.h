@@ -4,8 +4,10 @@
 #ifndef OBLONG_KERNELS_PRISM_H
 #define OBLONG_KERNELS_PRISM_H
 
+#include "core/kernels/constants.h"
 #include "core/kernels/lang.h"
 #include "core/kernels/patch_math.h"
+#include "core/kernels/rect_bounds.h"
 
 OBLONG_KERNELS_BEGIN
 
@@ -140,6 +142,48 @@ OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OB
     }
   }
   return count;
+}
+
+// The slabs of the oriented box around the inflated prism (PrismOBB: the face normal,
+// edge 0 and the in-plane perpendiculars of the three edges): [t0, t1] clipped to
+// lo[k] − slack <= axis[k]·(O + t D) <= hi[k] + slack, stopping at the first miss.
+OBLONG_INLINE void clipPrismSlabs(OBLONG_IN_ARRAY dvec3 axis[5], OBLONG_IN_ARRAY double lo[5],
+                                  OBLONG_IN_ARRAY double hi[5], OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, double slack,
+                                  OBLONG_INOUT(double) t0, OBLONG_INOUT(double) t1) {
+  for (int k = 0; k < 5 && t0 <= t1; ++k) {
+    OBLONG_PRECISE double o = dotD(axis[k], O), d = dotD(axis[k], D);
+    OBLONG_PRECISE double l = lo[k] - slack, h = hi[k] + slack;
+    if (d == 0.0) {
+      if (o < l || o > h) t0 = kInfD;
+      continue;
+    }
+    OBLONG_PRECISE double a = (l - o) / d, b = (h - o) / d;
+    if (a > b) {
+      double x = a;
+      a = b;
+      b = x;
+    }
+    t0 = t0 < a ? a : t0;
+    t1 = b < t1 ? b : t1;
+  }
+}
+
+// TraversalMesh::missesPrism, the cheap exact reject before any per-ray set-up: true when
+// [tmin, tmax] (with the traversal's slack for a box pad `budgetPad`) misses the padded
+// box around the inflated prism [infLo, infHi] or its oriented slabs. Only for origins
+// within the budget (max-norm maxO <= budget); beyond it, false (the full test decides).
+OBLONG_INLINE bool missesPrism(double tmin, double tmax, double maxO, double budget, double budgetPad, double lenD,
+                               OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, OBLONG_IN(dvec3) invD, OBLONG_IN(dvec3) infLo,
+                               OBLONG_IN(dvec3) infHi, bool obbValid, OBLONG_IN_ARRAY dvec3 axis[5],
+                               OBLONG_IN_ARRAY double lo[5], OBLONG_IN_ARRAY double hi[5]) {
+  if (!(maxO <= budget)) return false;
+  OBLONG_PRECISE double tAbs = double(OBLONG_TRAV_T_ABS_PADS) * budgetPad / lenD;
+  OBLONG_PRECISE double t0 = tmin - (OBLONG_TRAV_SLACK_REL * abs(tmin) + tAbs);
+  OBLONG_PRECISE double t1 = tmax + (OBLONG_TRAV_SLACK_REL * abs(tmax) + tAbs);
+  clipBox(infLo, infHi, O, invD, t0, t1);
+  if (!(t0 <= t1)) return true;
+  if (obbValid) clipPrismSlabs(axis, lo, hi, O, D, OBLONG_TRAV_OBB_ROUND * (maxO + 1.0), t0, t1);
+  return !(t0 <= t1);
 }
 
 OBLONG_KERNELS_END

@@ -904,38 +904,12 @@ bool runPatch() {
   return g_found;
 }
 
-// TraversalMesh::missesPrism (traversal/traversal_mesh.h), which Traversal::intersect runs before
-// RayPatch: a cheap exact reject for origins within the budget, [tmin, tmax] with the
-// traversal's slack against the padded box of the inflated prism, then the oriented box
-// around it (PrismOBB::clip). The host's own boxes (TriGpu infPad*, obb*).
+// TraversalMesh::missesPrism, which Traversal::intersect runs before RayPatch: the CPU's
+// own kernel (core/kernels/prism.h) on the host's boxes (TriGpu infPad*, obb*).
 bool missesPrism() {
   double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
-  if (!(maxO <= TRI.budget)) return false;
-  precise double tAbs = double(OBLONG_TRAV_T_ABS_PADS) * TRI.budgetPad / lengthD(g_D);
-  precise double t0 = double(g_tmin) - (OBLONG_TRAV_SLACK_REL * abs(double(g_tmin)) + tAbs);
-  precise double t1 = double(g_tmax) + (OBLONG_TRAV_SLACK_REL * abs(double(g_tmax)) + tAbs);
-  clipBox(TRI.infPadLo, TRI.infPadHi, g_O, g_invD, t0, t1);
-  if (!(t0 <= t1)) return true;
-  if (TRI.obbValid == 0) return false;
-  precise double slackO = OBLONG_TRAV_OBB_ROUND * (maxO + 1.0);
-  for (int k = 0; k < 5 && t0 <= t1; ++k) {
-    dvec3 ax = TRI.obbAxis[k];
-    double o = dotD(ax, g_O), d = dotD(ax, g_D);
-    precise double l = TRI.obbLo[k] - slackO, h = TRI.obbHi[k] + slackO;
-    if (d == 0.0) {
-      if (o < l || o > h) t0 = kInfD;
-      continue;
-    }
-    precise double a = (l - o) / d, b = (h - o) / d;
-    if (a > b) {
-      double x = a;
-      a = b;
-      b = x;
-    }
-    t0 = t0 < a ? a : t0;  // std::max
-    t1 = b < t1 ? b : t1;  // std::min
-  }
-  return !(t0 <= t1);
+  return missesPrism(double(g_tmin), double(g_tmax), maxO, TRI.budget, TRI.budgetPad, lengthD(g_D), g_O, g_D, g_invD,
+                     TRI.infPadLo, TRI.infPadHi, TRI.obbValid != 0, TRI.obbAxis, TRI.obbLo, TRI.obbHi);
 }
 
 // RayPatch's constructor: per ray and triangle constants.
