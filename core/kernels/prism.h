@@ -64,6 +64,18 @@ OBLONG_INLINE bool lexLess(OBLONG_IN(dvec3) p, OBLONG_IN(dvec3) n, OBLONG_IN(dve
 
 OBLONG_INLINE double det3D(OBLONG_IN(dvec3) a, OBLONG_IN(dvec3) b, OBLONG_IN(dvec3) c) { return dotD(a, crossD(b, c)); }
 
+// Records a crossing: the first and last by t, and how many.
+OBLONG_INLINE void addCrossing(double t, OBLONG_IN(dvec2) bary, double s, OBLONG_INOUT(Crossing) first,
+                               OBLONG_INOUT(Crossing) last, OBLONG_INOUT(int) count) {
+  Crossing c;
+  c.t = t;
+  c.bary = bary;
+  c.s = s;
+  if (count == 0 || t < first.t) first = c;
+  if (count == 0 || t > last.t) last = c;
+  ++count;
+}
+
 // Every crossing of the line O + tD with the prism's boundary (2 caps, 3 walls), with a
 // relative tolerance so that grazing and edge crossings are kept. Returns how many were
 // found, and the first and last (the prism's hull along the ray line).
@@ -93,13 +105,7 @@ OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OB
     OBLONG_PRECISE double t = dotD(e2, qv) * inv;
     if (!finiteD(t)) continue;
     OBLONG_PRECISE dvec2 bb = P.bv[0] + b1 * (P.bv[1] - P.bv[0]) + b2 * (P.bv[2] - P.bv[0]);
-    Crossing c;
-    c.t = t;
-    c.bary = bb;
-    c.s = s;
-    if (count == 0 || t < first.t) first = c;
-    if (count == 0 || t > last.t) last = c;
-    ++count;
+    addCrossing(t, bb, s, first, last, count);
   }
   // Walls: the ruled surfaces between the edge's displacement lines. The line at τ meets
   // the ray where det(O − Pτ, Nτ, D) = 0, a quadratic in τ. Canonical endpoint order.
@@ -132,13 +138,7 @@ OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OB
       if (s < P.a - sTol || s > P.b + sTol) continue;
       if (!finiteD(t)) continue;
       OBLONG_PRECISE dvec2 bb = P.bv[A] + tc * (P.bv[B] - P.bv[A]);
-      Crossing cr;
-      cr.t = t;
-      cr.bary = bb;
-      cr.s = s;
-      if (count == 0 || t < first.t) first = cr;
-      if (count == 0 || t > last.t) last = cr;
-      ++count;
+      addCrossing(t, bb, s, first, last, count);
     }
   }
   return count;
