@@ -33,8 +33,8 @@ struct Residual {
 }  // namespace
 
 InversionResultD CeresInverter::invertFastD(const dvec3& X, const DisplacedTriangle& T) const {
-  const inv::Frame<double> F(T);
-  const dvec3 W = X - dvec3(T.p[0]);
+  const inv::Frame<double> F = inv::frameOf<double>(T);
+  const dvec3 W = X - F.p0;
   Residual base;
   for (int k = 0; k < 3; ++k) {
     base.e1[k] = F.e1[k], base.e2[k] = F.e2[k], base.n0[k] = F.n0[k];

@@ -34,6 +34,7 @@
 #include "core/math.h"
 #include "core/registry.h"
 #include "core/triangle.h"
+#include "core/kernels/invert.h"  // the formulas, shared with the Vulkan shaders
 
 #include <algorithm>
 #include <cmath>
@@ -102,65 +103,49 @@ bool readDoublePrecision(ParamSet& ps, std::string_view strategy);
 
 namespace inv {
 
-// T in a local frame at p0, in scalar S: F(u,v,s) = e1 u + e2 v + s N(u,v) − W with
-// W = X − p0 (computing W first keeps float accuracy for triangles far from the origin).
+// The kernel's types (core/kernels/invert.h) for scalar S: Frame<S> is T in a local frame
+// at p0 (e1, e2, n0, f1, f2 and the longest edge L), Result<S> an inversion's (u, v, h).
 template <typename S>
-struct Frame {
-  using V = glm::vec<3, S>;
-  V e1, e2, n0, f1, f2;  // p1-p0, p2-p0, n0, n1-n0, n2-n0
-  S L;                   // length scale: the longest edge
-
-  explicit Frame(const DisplacedTriangle& T)
-      : e1(V(T.p[1]) - V(T.p[0])),
-        e2(V(T.p[2]) - V(T.p[0])),
-        n0(V(T.n[0])),
-        f1(V(T.n[1]) - V(T.n[0])),
-        f2(V(T.n[2]) - V(T.n[0])) {
-    const V e3 = e2 - e1;
-    L = std::sqrt(std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)}));
-  }
-  V N(S u, S v) const { return n0 + u * f1 + v * f2; }
-  V residual(S u, S v, S s, const V& W) const { return e1 * u + e2 * v + s * N(u, v) - W; }
+struct Kernel;
+template <>
+struct Kernel<float> {
+  using Frame = shared::InvFrameF;
+  using Result = shared::InvResultF;
+  using Cubic = shared::CubicF;
 };
+template <>
+struct Kernel<double> {
+  using Frame = shared::InvFrameD;
+  using Result = shared::InvResultD;
+  using Cubic = shared::CubicD;
+};
+template <typename S>
+using Frame = typename Kernel<S>::Frame;
 
 template <typename S>
-inline S det3(const glm::vec<3, S>& a, const glm::vec<3, S>& b, const glm::vec<3, S>& c) {
-  return glm::dot(a, glm::cross(b, c));
+inline Frame<S> frameOf(const DisplacedTriangle& T) {
+  using V = glm::vec<3, S>;
+  return shared::invFrame(V(T.p[0]), V(T.p[1]), V(T.p[2]), V(T.n[0]), V(T.n[1]), V(T.n[2]));
 }
 
-// One Newton step on F at (u,v,s) (Cramer's rule on J = [e1 + s f1, e2 + s f2, N]).
-// Returns false (and leaves the state) when J is singular or the step is not finite.
+// The kernel's result with the texture coordinates T.UV(u,v) (in S).
 template <typename S>
-inline bool newtonStep(const Frame<S>& F, const glm::vec<3, S>& W, S& u, S& v, S& s, S& du, S& dv,
-                       S& ds) {
-  using V = glm::vec<3, S>;
-  const V N = F.N(u, v);
-  const V r = F.e1 * u + F.e2 * v + s * N - W;
-  const V a = F.e1 + s * F.f1, b = F.e2 + s * F.f2;
-  const V bxN = glm::cross(b, N);
-  const S D = glm::dot(a, bxN);
-  if (!(std::abs(D) > S(0))) return false;
-  const S inv = S(1) / D;
-  du = -glm::dot(r, bxN) * inv;
-  dv = -glm::dot(a, glm::cross(r, N)) * inv;
-  ds = -glm::dot(a, glm::cross(b, r)) * inv;
-  if (!std::isfinite(du) || !std::isfinite(dv) || !std::isfinite(ds)) return false;
-  u += du, v += dv, s += ds;
-  return true;
+inline InversionResultT<S> toResult(const typename Kernel<S>::Result& k, const DisplacedTriangle& T) {
+  InversionResultT<S> r;
+  r.bary = {k.u, k.v};
+  using V2 = glm::vec<2, S>;
+  r.uv = (S(1) - k.u - k.v) * V2(T.t[0]) + k.u * V2(T.t[1]) + k.v * V2(T.t[2]);
+  r.h = k.h;
+  r.converged = k.converged;
+  r.iterations = k.iterations;
+  return r;
 }
 
 // Fills the result from (u,v,s): h = s·|N(u,v)|, uv = T.UV(u,v) (in S).
 template <typename S>
 inline InversionResultT<S> finish(const Frame<S>& F, const DisplacedTriangle& T, S u, S v, S s,
                                   bool converged, int iterations) {
-  InversionResultT<S> r;
-  r.bary = {u, v};
-  using V2 = glm::vec<2, S>;
-  r.uv = (S(1) - u - v) * V2(T.t[0]) + u * V2(T.t[1]) + v * V2(T.t[2]);
-  r.h = s * glm::length(F.N(u, v));
-  r.converged = converged && std::isfinite(u) && std::isfinite(v) && std::isfinite(r.h);
-  r.iterations = iterations;
-  return r;
+  return toResult<S>(shared::invFinish(F, u, v, s, converged, iterations), T);
 }
 
 }  // namespace inv

@@ -38,9 +38,8 @@
 #pragma once
 
 #include "core/stats.h"
-#include "inversion/cubic.h"
 #include "inversion/inverter.h"
-#include "core/kernels/constants.h"  // the values the Vulkan shader mirrors
+#include "core/kernels/constants.h"
 
 namespace oblong {
 
@@ -52,33 +51,11 @@ OBLONG_STAT_COUNTER("newton/Fallbacks", newtonFallbacks);
 struct NewtonOptions {
   bool doublePrecision = false;  // arithmetic of invert()
   double tolerance = OBLONG_NEWTON_TOLERANCE;
-  double toleranceD = 1e-10;  // used by invertD()
+  double toleranceD = OBLONG_NEWTON_TOLERANCE_D;  // used by invertD()
   int maxIterations = OBLONG_NEWTON_MAX_ITERATIONS;
   bool fallback = true;  // to cubic when the result is unconverged or outside T
 };
 
-namespace inv {
-// Newton from (1/3, 1/3, 0) in scalar S. X is given in S as well.
-template <typename S>
-inline InversionResultT<S> newtonSolve(const glm::vec<3, S>& X, const DisplacedTriangle& T, S tol,
-                                       int maxIt) {
-  const Frame<S> F(T);
-  const glm::vec<3, S> W = X - glm::vec<3, S>(T.p[0]);
-  S u = S(1) / S(3), v = S(1) / S(3), s = S(0);
-  bool conv = false;
-  int it = 0;
-  while (it < maxIt) {
-    S du, dv, ds;
-    if (!newtonStep(F, W, u, v, s, du, dv, ds)) break;
-    ++it;
-    if (std::max(std::abs(du), std::abs(dv)) <= tol && std::abs(ds) <= tol * (F.L + std::abs(s))) {
-      conv = true;
-      break;
-    }
-  }
-  return finish(F, T, u, v, s, conv, it);
-}
-}  // namespace inv
 
 class Newton final : public InverterImpl<Newton> {
  public:
@@ -108,17 +85,14 @@ class Newton final : public InverterImpl<Newton> {
   }
 
  private:
+  // The kernel (core/kernels/invert.h), which the Vulkan shaders run as well.
   template <typename S>
   InversionResultT<S> solve(const glm::vec<3, S>& X, const DisplacedTriangle& T, S tol) const {
-    InversionResultT<S> r = inv::newtonSolve<S>(X, T, tol, o_.maxIterations);
-    const S eps = sizeof(S) == 4 ? S(OBLONG_NEWTON_OUTSIDE_EPS) : S(1e-9);
-    if (o_.fallback && ((!r.converged && tol > S(0)) || !(r.outside() <= eps))) {  // also NaN
-      OBLONG_STAT_INC(newtonFallbacks);
-      const int it = r.iterations;
-      r = inv::cubicSolve<S>(X, T, OBLONG_NEWTON_FALLBACK_POLISH);
-      r.iterations += it;
-    }
-    return r;
+    bool fellBack;
+    const auto r = shared::newtonSolve(inv::frameOf<S>(T), X, tol, o_.maxIterations, o_.fallback,
+                                       OBLONG_NEWTON_FALLBACK_POLISH, fellBack);
+    if (fellBack) OBLONG_STAT_INC(newtonFallbacks);
+    return inv::toResult<S>(r, T);
   }
   NewtonOptions o_;
 };

@@ -1,7 +1,7 @@
 // The traversal's and the inverter's numerical constants, defined once for the CPU
-// (traversal/ray_patch.h, traversal/traversal_mesh.h, inversion/newton.h)
-// and the Vulkan shaders (render/vulkan/shaders/traversal.glsl, which mirrors
-// TraversalMesh::missesPrism, RayPatch and Newton::solve line by line). This header is
+// (traversal/ray_patch.h, traversal/traversal_mesh.h, the kernels of core/kernels/)
+// and the Vulkan shaders (render/vulkan/shaders/traversal.glsl, which mirrors RayPatch's
+// driver loop line by line). This header is
 // both C++ and GLSL: plain #defines with literal values, nothing else. Change a value
 // here and both sides change; a literal changed on one side only is caught by the
 // CPU/GPU contract test ("[vulkan]", tests/vulkan_test.cpp: same hits and the same
@@ -14,9 +14,8 @@
 // own double value (the SPIR-V holds the double 1e-05, not the float 1e-05f), so both
 // sides compute with the same values.
 //
-// The kernels of this folder keep their own literals (one copy, both languages). Not here
-// yet: the literals of inversion/cubic.h (polyRoots, cubicSolve), still written on both
-// sides, held only by the parity test (docs/vulkan.md, "The contract").
+// The kernels of this folder keep their structural literals (0, 1, 2, 3 in formulas; one
+// copy, both languages); every tolerance and threshold is here.
 #ifndef OBLONG_TRAVERSAL_CONSTANTS_H
 #define OBLONG_TRAVERSAL_CONSTANTS_H
 
@@ -123,5 +122,27 @@
 
 // Polishing Newton steps of the cubic fallback (inv::cubicSolve(X, T, this)).
 #define OBLONG_NEWTON_FALLBACK_POLISH 1
+
+// The same two thresholds in double arithmetic (invertD, precision "double").
+#define OBLONG_NEWTON_TOLERANCE_D 1e-10
+#define OBLONG_NEWTON_OUTSIDE_EPS_D 1e-9
+
+// ---- the cubic inverter (inversion/cubic.h; core/kernels/invert_scalar.h) ----------------
+
+// A leading coefficient is dropped when the root it carries lies beyond 1/this triangle
+// sizes (rounding noise on a3 for coplanar normals then cannot create spurious roots).
+#define OBLONG_CUBIC_DROP_EPS_F 1e-6
+#define OBLONG_CUBIC_DROP_EPS_D 1e-12
+
+// A candidate x is kept as a root when |f(x)| <= this · Σ|a_k||x|^k.
+#define OBLONG_CUBIC_ROOT_TOL_F 1e-2
+#define OBLONG_CUBIC_ROOT_TOL_D 1e-6
+
+// Two roots whose distances outside T differ by at most this tie (the smaller |s| wins).
+#define OBLONG_CUBIC_TIE_EPS_F 1e-5
+#define OBLONG_CUBIC_TIE_EPS_D 1e-10
+
+// 2π/3, the trigonometric form's step between roots.
+#define OBLONG_TWO_PI_OVER_3 2.0943951023931954923
 
 #endif

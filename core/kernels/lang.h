@@ -16,7 +16,8 @@
 //   OBLONG_PRECISE  on every declaration whose arithmetic must not be fused or
 //                   reordered (GLSL precise; the CPU's strict IEEE double needs nothing)
 // min, max and abs are GLSL's on both sides (for scalars: y < x ? y : x, as std::min);
-// dotD and crossD are glm's formulas, which GLSL's built-ins need not follow. An
+// dotD, crossD, dotF, crossF (and lengthD, lengthF) are glm's formulas, which GLSL's
+// built-ins need not follow; cbrtF is std::cbrt on the CPU and pow on the GPU. An
 // unsuffixed literal is a float in GLSL and a double in C++; glslang folds its conversion
 // to double from the literal's own double value, so in double expressions both sides use
 // the same constants. Float arithmetic takes the f suffix (1.0f), read as a float by both
@@ -53,6 +54,25 @@ inline bool isinfD(double x) { return std::isinf(x); }
 inline double copysignD(double m, double s) { return std::copysign(m, s); }
 constexpr double kInfD = std::numeric_limits<double>::infinity();
 constexpr float kNaNF = std::numeric_limits<float>::quiet_NaN();
+// Float scalars: exact matches, so that float arithmetic stays float (a double overload
+// would promote the whole expression).
+inline float min(float a, float b) { return b < a ? b : a; }
+inline float max(float a, float b) { return a < b ? b : a; }
+inline float abs(float x) { return std::abs(x); }
+inline float clamp(float x, float lo, float hi) { return x < lo ? lo : (hi < x ? hi : x); }
+inline float sqrt(float x) { return std::sqrt(x); }
+using std::acos;
+using std::cos;
+inline bool finiteF(float x) { return std::isfinite(x); }
+inline float copysignF(float m, float s) { return std::copysign(m, s); }
+inline float cbrtF(float x) { return std::cbrt(x); }
+inline double cbrtD(double x) { return std::cbrt(x); }
+// glm's dot, cross and length, written out (GLSL's built-ins need not follow them).
+inline float dotF(const vec3& a, const vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline vec3 crossF(const vec3& x, const vec3& y) {
+  return vec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
+}
+inline float lengthF(const vec3& v) { return std::sqrt(dotF(v, v)); }
 inline double dotD(const dvec3& a, const dvec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline dvec3 crossD(const dvec3& x, const dvec3& y) {
   return dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
@@ -101,6 +121,22 @@ dvec3 crossD(dvec3 x, dvec3 y) {
   return r;
 }
 double lengthD(dvec3 v) { return sqrt(dotD(v, v)); }
+bool finiteF(float x) { return !isinf(x) && !isnan(x); }
+float copysignF(float m, float s) { return (floatBitsToUint(s) & 0x80000000u) != 0u ? -abs(m) : abs(m); }
+// std::cbrt's value from pow: not bit-identical to the C library's (docs/vulkan.md).
+float cbrtF(float x) { return x == 0.0f ? 0.0f : copysignF(pow(abs(x), 1.0f / 3.0f), x); }
+float dotF(vec3 a, vec3 b) {
+  precise float r = a.x * b.x + a.y * b.y + a.z * b.z;
+  return r;
+}
+vec3 crossF(vec3 x, vec3 y) {
+  precise vec3 r = vec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
+  return r;
+}
+float lengthF(vec3 v) {
+  precise float r = sqrt(dotF(v, v));
+  return r;
+}
 
 #endif
 

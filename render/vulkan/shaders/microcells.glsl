@@ -81,20 +81,11 @@ float microAtSample(dvec2 s) {
   return r;
 }
 
-// ---- float helpers as glm computes them ---------------------------------------------
+// ---- float helpers as glm computes them (lengthF, crossF: core/kernels/lang.h) ------
 vec3 normalizeF(vec3 v) {  // glm::normalize: v * (1 / sqrt(dot(v, v)))
   precise float d = v.x * v.x + v.y * v.y + v.z * v.z;
   precise float inv = 1.0 / sqrt(d);
   precise vec3 r = v * inv;
-  return r;
-}
-float lengthF(vec3 v) {
-  precise float d = v.x * v.x + v.y * v.y + v.z * v.z;
-  precise float r = sqrt(d);
-  return r;
-}
-vec3 crossF(vec3 a, vec3 b) {
-  precise vec3 r = vec3(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
   return r;
 }
 vec3 triP(float u, float v) {  // DisplacedTriangle::P

@@ -11,9 +11,9 @@
 // traversal, midpoint2d splits (closed-form crossing of ψ with the middle line, else the
 // t-midpoint by inversion), texel marching of the cells within ε of a piece — and the
 // projection-free box subdivision (runBoxOnly / processBox) wherever the CPU uses it.
-// Differences from the CPU (docs/vulkan.md): the inverter is newton with its cubic
-// fallback as on the CPU, but the cubic's std::cbrt / acos / cos are GLSL's (not bit-
-// identical; every curve point is validated by its residual either way); the
+// Differences from the CPU (docs/vulkan.md): the inverter is the CPU's newton with its
+// cubic fallback (core/kernels/invert.h), but the cubic's cbrt / acos / cos are GLSL's (not
+// bit-identical; every curve point is validated by its residual either way); the
 // per-ray counters are kept, the statistics registry is not.
 //
 // NIR inlines every function call, and lavapipe's compile time grows quickly with the
@@ -28,6 +28,7 @@
 #include "core/kernels/rect_bounds.h"
 #include "core/kernels/prism.h"
 #include "core/kernels/curve_point.h"
+#include "core/kernels/invert.h"
 
 #define kInfF uintBitsToFloat(0x7f800000u)
 
@@ -222,209 +223,15 @@ bool makePoint(double t, dvec2 b, double s, out CurvePoint outp) {
   return makePoint(g_F, g_claim, g_O, g_D, t, b, s, outp);
 }
 
-// ---- the inverter: newton (inversion/newton.h) with its cubic fallback (cubic.h) -----
-float det3F(vec3 a, vec3 b, vec3 c) {
-  precise vec3 x = crossF(b, c);
-  precise float r = a.x * x.x + a.y * x.y + a.z * x.z;
-  return r;
-}
-float dotF(vec3 a, vec3 b) {
-  precise float r = a.x * b.x + a.y * b.y + a.z * b.z;
-  return r;
-}
-float copysignF(float m, float s) { return (floatBitsToUint(s) & 0x80000000u) != 0u ? -abs(m) : abs(m); }
-bool finiteF(float x) { return !isinf(x) && !isnan(x); }
-
-// inv::polishPolyRoot<float>
-float polishPolyRoot(float a0, float a1, float a2, float a3, float x) {
-  precise float f = ((a3 * x + a2) * x + a1) * x + a0;
-  for (int k = 0; k < 2; ++k) {
-    precise float df = (3.0 * a3 * x + 2.0 * a2) * x + a1;
-    if (!(abs(df) > 0.0)) break;
-    precise float nx = x - f / df;
-    precise float nf = ((a3 * nx + a2) * nx + a1) * nx + a0;
-    if (!(abs(nf) < abs(f))) break;
-    x = nx;
-    f = nf;
-  }
-  return x;
-}
-
-// inv::polyRoots<float>: real roots of a3 x³ + a2 x² + a1 x + a0 (degree-dropping rule,
-// Cardano / trigonometric form, deflation, polishing, the root filter). std::cbrt,
-// std::acos and std::cos are GLSL's here: not bit-identical to the C library's, which
-// only moves the start of the polishing Newton step.
-int polyRoots(float a0, float a1, float a2, float a3, out float x[3]) {
-  x[0] = 0.0;
-  x[1] = 0.0;
-  x[2] = 0.0;
-  const float eps = 1e-6;
-  float M = max(max(abs(a0), abs(a1)), max(abs(a2), abs(a3)));
-  if (!(M > 0.0) || !finiteF(M)) return 0;
-  precise float big = 1.0 / eps;
-  bool cubic = abs(a2) < big * abs(a3) || abs(a1) < big * big * abs(a3) || abs(a0) < big * big * big * abs(a3);
-  bool quadratic = abs(a1) < big * abs(a2) || abs(a0) < big * big * abs(a2);
-  int n = 0;
-  precise float c0 = 0.0, c1 = 0.0, c2 = 0.0;  // the quadratic to solve, if any
-  bool quad = false;
-  if (cubic) {
-    precise float A = a2 / a3, B = a1 / a3, C = a0 / a3;
-    precise float A3 = A / 3.0;
-    precise float p = B - A * A3, q = 2.0 * A3 * A3 * A3 - A3 * B + C;
-    precise float D = q * q / 4.0 + p * p * p / 27.0;
-    precise float r;
-    if (D > 0.0) {
-      precise float w = -q / 2.0 - copysignF(sqrt(D), q);
-      precise float t = w == 0.0 ? 0.0 : copysignF(pow(abs(w), 1.0 / 3.0), w);  // std::cbrt
-      r = (t != 0.0 ? t - p / (3.0 * t) : 0.0) - A3;
-    } else if (p == 0.0) {
-      r = -A3;
-    } else {
-      precise float rr = sqrt(-p / 3.0);
-      precise float c = clamp(3.0 * q / (2.0 * p) * sqrt(-3.0 / p), -1.0, 1.0);
-      precise float phi = acos(c) / 3.0;
-      const float k2pi3 = 2.0943951023931954923;
-      r = 0.0;
-      for (int k = 0; k < 3; ++k) {
-        precise float t = 2.0 * rr * cos(phi - float(k) * k2pi3) - A3;
-        if (abs(t) > abs(r)) r = t;
-      }
-    }
-    if (!finiteF(r)) return 0;
-    r = polishPolyRoot(a0, a1, a2, a3, r);
-    x[n++] = r;
-    precise float b2 = a2 + a3 * r;
-    quad = true;
-    if (r != 0.0 && abs(r) * r * r * abs(a3) >= abs(a0)) {
-      c0 = -a0;
-      c1 = -(a1 + a0 / r);
-      c2 = a3 * r;
-    } else {
-      c0 = a1 + r * b2;
-      c1 = b2;
-      c2 = a3;
-    }
-  } else if (quadratic) {
-    quad = true;
-    c0 = a0;
-    c1 = a1;
-    c2 = a2;
-  } else if (abs(a1) > eps * M) {
-    x[n++] = polishPolyRoot(a0, a1, a2, a3, -a0 / a1);
-  }
-  if (quad) {  // inv::quadRoots(c0, c1, c2, eps)
-    precise float D = c1 * c1 - 4.0 * c2 * c0;
-    if (D < 0.0 && D > -16.0 * eps * (c1 * c1 + abs(4.0 * c2 * c0))) D = 0.0;
-    if (D >= 0.0) {
-      precise float q = -0.5 * (c1 + copysignF(sqrt(D), c1));
-      float y[2] = float[2](0.0, 0.0);
-      int m;
-      if (q == 0.0) {
-        m = 1;
-      } else {
-        y[0] = q / c2;
-        y[1] = c0 / q;
-        m = 2;
-      }
-      for (int i = 0; i < m; ++i) x[n++] = polishPolyRoot(a0, a1, a2, a3, y[i]);
-    }
-  }
-  const float tol = 1e-2;
-  int kept = 0;
-  for (int i = 0; i < n; ++i) {
-    precise float xi = x[i], ax = abs(xi);
-    precise float f = ((a3 * xi + a2) * xi + a1) * xi + a0;
-    precise float scale = ((abs(a3) * ax + abs(a2)) * ax + abs(a1)) * ax + abs(a0);
-    if (finiteF(xi) && abs(f) <= tol * scale) x[kept++] = xi;
-  }
-  return kept;
-}
-
-// Newton::solve<float>: inv::newtonSolve from (1/3, 1/3, 0) (OBLONG_NEWTON_TOLERANCE,
-// OBLONG_NEWTON_MAX_ITERATIONS); if that is not converged or outside T by more than
-// OBLONG_NEWTON_OUTSIDE_EPS, inv::cubicSolve (the root whose offset-triangle barycentrics
-// are inside T, then OBLONG_NEWTON_FALLBACK_POLISH polishing Newton steps). One
-// Newton-step site for both passes.
+// ---- the inverter: newton with its cubic fallback (core/kernels/invert.h), in float as
+// the CPU traversal calls Newton::invert --------------------------------------------------
 void invertFloat(vec3 X, out vec2 bary, out float h) {
-  precise vec3 e1 = TRI.p[1] - TRI.p[0], e2 = TRI.p[2] - TRI.p[0];
-  precise vec3 n0 = TRI.n[0], f1 = TRI.n[1] - TRI.n[0], f2 = TRI.n[2] - TRI.n[0];
-  precise vec3 e3 = e2 - e1;
-  precise float L = sqrt(max(max(dotF(e1, e1), dotF(e2, e2)), dotF(e3, e3)));
-  precise vec3 W = X - TRI.p[0];
-  precise float u = 1.0 / 3.0, v = 1.0 / 3.0, s = 0.0;
-  const float tol = OBLONG_NEWTON_TOLERANCE;
-  bool conv = false;
-  for (int pass = 0; pass < 2; ++pass) {
-    if (pass == 1) {
-      precise float hh = s * lengthF(n0 + u * f1 + v * f2);
-      precise float outside = max(max(0.0, -u), max(-v, u + v - 1.0));
-      bool converged = conv && finiteF(u) && finiteF(v) && finiteF(hh);
-      if (converged && outside <= OBLONG_NEWTON_OUTSIDE_EPS) break;  // Newton's result stands
-      // inv::cubicSolve<float>(X, T, 1)
-      precise float iL = 1.0 / L;
-      precise vec3 e1s = e1 * iL, e2s = e2 * iL, w = W * iL;
-      precise float a0 = det3F(e1s, e2s, w);
-      precise float a1 = det3F(f1, e2s, w) + det3F(e1s, f2, w) - det3F(e1s, e2s, n0);
-      precise float a2 = det3F(f1, f2, w) - det3F(f1, e2s, n0) - det3F(e1s, f2, n0);
-      precise float a3 = -det3F(f1, f2, n0);
-      float roots[3];
-      int nr = polyRoots(a0, a1, a2, a3, roots);
-      const float tieEps = 1e-5;
-      bool found = false;
-      precise float bu = 0.0, bv = 0.0, bs = 0.0, bOut = 0.0;
-      for (int i = 0; i < nr; ++i) {
-        precise float sg = roots[i];
-        precise vec3 A = e1s + sg * f1, B = e2s + sg * f2, R = w - sg * n0;
-        precise vec3 nS = crossF(A, B);
-        precise float d = dotF(nS, nS);
-        if (!(d > 0.0)) continue;
-        precise float cu = dotF(crossF(R, B), nS) / d, cv = dotF(crossF(A, R), nS) / d;
-        if (!finiteF(cu) || !finiteF(cv)) continue;
-        precise float o = max(max(0.0, -cu), max(-cv, cu + cv - 1.0));
-        bool better = !found || o < bOut - tieEps || (o <= bOut + tieEps && abs(sg) < abs(bs));
-        if (better) {
-          found = true;
-          bu = cu;
-          bv = cv;
-          bs = sg;
-          bOut = o;
-        }
-      }
-      if (!found) {  // finish(F, T, 1/3, 1/3, 0, false, 0)
-        u = 1.0 / 3.0;
-        v = 1.0 / 3.0;
-        s = 0.0;
-        break;
-      }
-      u = bu;
-      v = bv;
-      s = bs * L;
-    }
-    int steps = pass == 0 ? OBLONG_NEWTON_MAX_ITERATIONS : OBLONG_NEWTON_FALLBACK_POLISH;
-    for (int it = 0; it < steps; ++it) {  // inv::newtonStep
-      precise vec3 N = n0 + u * f1 + v * f2;
-      precise vec3 r = e1 * u + e2 * v + s * N - W;
-      precise vec3 a = e1 + s * f1, b = e2 + s * f2;
-      precise vec3 bxN = crossF(b, N);
-      precise float D = dotF(a, bxN);
-      if (!(abs(D) > 0.0)) break;
-      precise float inv = 1.0 / D;
-      precise float du = -dotF(r, bxN) * inv;
-      precise float dv = -dotF(a, crossF(r, N)) * inv;
-      precise float ds = -dotF(a, crossF(b, r)) * inv;
-      if (!finiteF(du) || !finiteF(dv) || !finiteF(ds)) break;
-      u += du;
-      v += dv;
-      s += ds;
-      if (pass == 0 && max(abs(du), abs(dv)) <= tol && abs(ds) <= tol * (L + abs(s))) {
-        conv = true;
-        break;
-      }
-    }
-  }
-  precise float hh = s * lengthF(n0 + u * f1 + v * f2);
-  bary = vec2(u, v);
-  h = hh;
+  InvFrameF F = invFrame(TRI.p[0], TRI.p[1], TRI.p[2], TRI.n[0], TRI.n[1], TRI.n[2]);
+  bool fellBack;
+  InvResultF r = newtonSolve(F, X, OBLONG_NEWTON_TOLERANCE, OBLONG_NEWTON_MAX_ITERATIONS, true,
+                             OBLONG_NEWTON_FALLBACK_POLISH, fellBack);
+  bary = vec2(r.u, r.v);
+  h = r.h;
 }
 
 bool invertAt(double t, out CurvePoint outp) {
