@@ -8,6 +8,7 @@
 
 #include "core/math.h"
 #include "core/memory.h"
+#include "core/kernels/texels.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -48,11 +49,7 @@ class HeightMap {
   Interval range() const;  // min and max texel
   size_t bytes() const { return texels_.size() * sizeof(float); }
 
-  static int wrap(int i, int n) {
-    if (unsigned(i) < unsigned(n)) return i;  // the common case: no division
-    const int r = i % n;
-    return r < 0 ? r + n : r;
-  }
+  static int wrap(int i, int n) { return shared::wrapIndex(i, n); }
 
  private:
   int w_ = 0, h_ = 0;

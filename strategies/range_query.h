@@ -142,16 +142,10 @@ std::vector<std::string> rangeQueryNames();
 const StrategyTraits& rangeQueryTraits(const std::string& name);
 
 // Helpers for strategies: one axis [a0,a1] of a sample range on a map axis of size n.
-// wrapAxis: the whole axis [0,n-1] when the extent is >= n; else the start wrapped into
-// [0,n) and the end relative to it (e may reach up to 2n-2: the range crosses the border).
-inline void wrapAxis(int a0, int a1, int n, int& s, int& e) {
-  if (a1 - a0 + 1 >= n) {
-    s = 0, e = n - 1;
-    return;
-  }
-  s = HeightMap::wrap(a0, n);
-  e = s + (a1 - a0);
-}
+// wrapAxis (core/kernels/texels.h): the whole axis [0,n-1] when the extent is >= n; else
+// the start wrapped into [0,n) and the end relative to it (e may reach up to 2n-2: the
+// range crosses the border).
+using shared::wrapAxis;
 // splitAxis: the same as one or two non-crossing pieces within [0,n).
 struct AxisPieces {
   int count = 1;

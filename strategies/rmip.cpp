@@ -134,8 +134,8 @@ Rmip::Layout Rmip::layout(int W, int H, const QueryNeeds& needs, const Options& 
     const int px = L.f == 1 ? e : (e - 1 + L.f - 1) / L.f + 2;
     return std::min(px, n);
   };
-  L.P = std::max(log2floor(pixExtent(needs.maxExtentX, L.rw)), L.p0);
-  L.Q = std::max(log2floor(pixExtent(needs.maxExtentY, L.rh)), L.p0);
+  L.P = std::max(shared::findMSB(pixExtent(needs.maxExtentX, L.rw)), L.p0);
+  L.Q = std::max(shared::findMSB(pixExtent(needs.maxExtentY, L.rh)), L.p0);
 
   L.layers.assign(size_t(L.P + 1) * (L.Q + 1), Layer{0, 0, 0, 0, 0});
   for (int p = L.p0; p <= L.P; ++p)

@@ -30,6 +30,7 @@
 #pragma once
 
 #include "core/stats.h"
+#include "core/kernels/rmip_query.h"
 #include "strategies/quantize.h"
 #include "strategies/range_query.h"
 
@@ -150,60 +151,33 @@ class Rmip final : public RangeQueryImpl<Rmip> {
     else return Interval{};
   }
 
-  // Sample axis range -> RMIP pixel range: start in [0,n), end possibly >= n (crossing
-  // the border), or the whole axis [0,n-1].
-  void toPixels(int a0, int a1, int size, int n, int& s, int& e) const {
-    wrapAxis(a0, a1, size, s, e);
-    if (f_ == 1) return;
-    e = e < size ? e / f_ : n + (e - size) / f_;  // the last pixel may be partial
-    s /= f_;
-    if (e - s + 1 >= n) s = 0, e = n - 1;
+  // The storage as the kernel (core/kernels/rmip_query.h) reads it: entries of type T
+  // (16-bit code pairs or float pairs) and the layer table.
+  template <typename T>
+  struct Access {
+    const T* d;
+    const Layer* layers;
+  };
+  template <typename T>
+  friend shared::RmipLayerRef rmipLayer(const Access<T>& a, int index) {
+    const Layer& L = a.layers[index];
+    return {L.offset, L.nx, L.shiftX, L.shiftY};
   }
-
-  static int log2floor(int v) { return int(std::bit_width(unsigned(v))) - 1; }
+  template <typename T>
+  friend void rmipJoin(const Access<T>& a, uint32_t entry, T& acc) {
+    OBLONG_STAT_INC(rmipLookups);
+    acc = joinT(acc, a.d[entry]);
+  }
 
   template <typename T>
   T rangeT(const T* d, const SampleRange& r) const {
     OBLONG_STAT_INC(rmipQueries);
-    int x0, x1, y0, y1;
-    toPixels(r.x0, r.x1, map().width(), rw_, x0, x1);
-    toPixels(r.y0, r.y1, map().height(), rh_, y0, y1);
-    if (wrap_ || (x1 < rw_ && y1 < rh_)) return block(d, x0, x1, y0, y1);
-    // Wrapped blocks not stored: split at the border into non-crossing pieces.
-    OBLONG_STAT_INC(rmipBorderSplits);
-    const int xa[2] = {x0, 0}, xb[2] = {std::min(x1, rw_ - 1), x1 - rw_};
-    const int ya[2] = {y0, 0}, yb[2] = {std::min(y1, rh_ - 1), y1 - rh_};
+    const shared::RmipGeom g{f_, map().width(), map().height(), rw_, rh_, P_, Q_, p0_, wrap_};
     T out = emptyT<T>();
-    for (int b = 0; b < (y1 < rh_ ? 1 : 2); ++b)
-      for (int a = 0; a < (x1 < rw_ ? 1 : 2); ++a) out = joinT(out, block(d, xa[a], xb[a], ya[b], yb[b]));
-    return out;
-  }
-
-  // Pixel block [x0,x1]x[y0,y1] (x0 in [0,rw), x1 < x0 + rw; crossing only if wrap_):
-  // Eq. 5, with blocks of the top built layer tiled over ranges beyond it. A block
-  // narrower than the first stored layer's (pairs: 1 pixel) uses that layer's entry at x0.
-  template <typename T>
-  T block(const T* d, int x0, int x1, int y0, int y1) const {
-    const int p = std::clamp(log2floor(x1 - x0 + 1), p0_, P_), q = std::clamp(log2floor(y1 - y0 + 1), p0_, Q_);
-    const Layer& L = layers_[size_t(p) * (Q_ + 1) + q];
-    const int lx = 1 << p, ly = 1 << q;
-    d += L.offset;
-    T out = emptyT<T>();
-    for (int cy = y0;; cy += ly) {
-      const bool lastY = cy + ly - 1 >= y1;
-      if (lastY) cy = std::max(y1 - ly + 1, y0);
-      const T* row = d + size_t((cy >= rh_ ? cy - rh_ : cy) >> L.shiftY) * L.nx;
-      for (int cx = x0;; cx += lx) {
-        const bool lastX = cx + lx - 1 >= x1;
-        if (lastX) cx = std::max(x1 - lx + 1, x0);
-        OBLONG_STAT_INC(rmipLookups);
-        out = joinT(out, row[(cx >= rw_ ? cx - rw_ : cx) >> L.shiftX]);
-        if (lastX) break;
-      }
-      if (lastY) break;
-    }
+    [[maybe_unused]] const int flags = shared::rmipRange(Access<T>{d, layers_.data()}, g, r.x0, r.y0, r.x1, r.y1, out);
 #if OBLONG_STATS
-    if (x1 - x0 + 1 >= 2 * lx || y1 - y0 + 1 >= 2 * ly) OBLONG_STAT_INC(rmipBeyondLayers);
+    if (flags & OBLONG_RMIP_BORDER_SPLIT) OBLONG_STAT_INC(rmipBorderSplits);
+    OBLONG_STAT_ADD(rmipBeyondLayers, flags / OBLONG_RMIP_BEYOND);
 #endif
     return out;
   }

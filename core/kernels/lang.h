@@ -15,6 +15,9 @@
 //   OBLONG_FORCE_INLINE on hot C++ paths (GLSL inlines every call anyway)
 //   OBLONG_PRECISE  on every declaration whose arithmetic must not be fused or
 //                   reordered (GLSL precise; the CPU's strict IEEE double needs nothing)
+//   OBLONG_TEMPLATE2(A, B) before a function over two types that each language supplies:
+//                   C++ template parameters, GLSL macros the including shader defines
+//                   (with the functions the kernel calls on them)
 // min, max and abs are GLSL's on both sides (for scalars: y < x ? y : x, as std::min);
 // dotD, crossD, dotF, crossF (and lengthD, lengthF) are glm's formulas, which GLSL's
 // built-ins need not follow; cbrtF is std::cbrt on the CPU and pow on the GPU. An
@@ -29,6 +32,7 @@
 #ifdef __cplusplus
 #include <glm/glm.hpp>
 
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -38,11 +42,13 @@ using glm::dvec3;
 using glm::ivec2;
 using glm::vec2;
 using glm::vec3;
+using uint = unsigned int;
 // Scalars: non-templates, so that they win over glm's templates, which serve vectors.
 inline double min(double a, double b) { return b < a ? b : a; }
 inline double max(double a, double b) { return a < b ? b : a; }
 inline int min(int a, int b) { return b < a ? b : a; }
 inline int max(int a, int b) { return a < b ? b : a; }
+inline int clamp(int x, int lo, int hi) { return x < lo ? lo : (hi < x ? hi : x); }
 inline double abs(double x) { return std::abs(x); }
 inline double clamp(double x, double lo, double hi) { return x < lo ? lo : (hi < x ? hi : x); }
 inline double sqrt(double x) { return std::sqrt(x); }
@@ -64,6 +70,7 @@ inline float sqrt(float x) { return std::sqrt(x); }
 using std::acos;
 using std::cos;
 inline bool finiteF(float x) { return std::isfinite(x); }
+inline int findMSB(int v) { return int(std::bit_width(unsigned(v))) - 1; }  // GLSL's, for v > 0
 inline float copysignF(float m, float s) { return std::copysign(m, s); }
 inline float cbrtF(float x) { return std::cbrt(x); }
 inline double cbrtD(double x) { return std::cbrt(x); }
@@ -90,6 +97,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_IN_ARRAY const
 #define OBLONG_OUT_ARRAY
 #define OBLONG_PRECISE
+#define OBLONG_TEMPLATE2(A, B) template <typename A, typename B>
 
 #else  // GLSL
 
@@ -103,6 +111,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_IN_ARRAY in
 #define OBLONG_OUT_ARRAY out
 #define OBLONG_PRECISE precise
+#define OBLONG_TEMPLATE2(A, B)
 
 #define kInfD double(uintBitsToFloat(0x7f800000u))
 #define kNaNF uintBitsToFloat(0x7fc00000u)

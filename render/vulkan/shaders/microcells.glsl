@@ -12,11 +12,9 @@
 
 #include "core/kernels/lang.h"
 #include "core/kernels/microtri.h"
+#include "core/kernels/texels.h"  // wrapIndex
 
 // ---- height map (core/heightmap.h) --------------------------------------------------
-int wrapIndex(int i, int n) {  // HeightMap::wrap; GLSL's % is undefined for negatives
-  return i >= 0 ? i % n : n - 1 - ((-i - 1) % n);
-}
 float levelAt(MeshGpu m, int i, int j) {  // HeightMap::at of a record's map
   return texelAt(m.texelOffset + uint(wrapIndex(j, m.H)) * uint(m.W) + uint(wrapIndex(i, m.W)), m.chunkShift);
 }

@@ -72,83 +72,37 @@ void testMicro(MicroVertex v0, MicroVertex v1, MicroVertex v2) {
   }
 }
 
-// ---- RMIP range query (strategies/rmip.h Rmip::rawRange, range_query.h wrapAxis) ----
-void wrapAxis(int a0, int a1, int n, out int s, out int e) {
-  if (a1 - a0 + 1 >= n) {
-    s = 0;
-    e = n - 1;
-    return;
-  }
-  s = wrapIndex(a0, n);
-  e = s + (a1 - a0);
-}
-void toPixels(MeshGpu m, int a0, int a1, int size, int n, out int s, out int e) {
-  wrapAxis(a0, a1, size, s, e);
-  int f = m.rmipF;
-  if (f == 1) return;
-  e = e < size ? e / f : n + (e - size) / f;
-  s /= f;
-  if (e - s + 1 >= n) {
-    s = 0;
-    e = n - 1;
-  }
-}
+// ---- RMIP range query: the kernel (core/kernels/rmip_query.h) over the mesh record's
+// layer table and entries (bits 16: one word of codes; bits 32: two float words) --------
+#define RmipAccess MeshGpu
+#define RmipAcc vec2
+#include "core/kernels/rmip_query.h"
 // Quantizer16::decode, unfused as on the CPU.
 float rmipDecode(MeshGpu m, uint code) {
   precise float scaled = float(code) * m.rmipStep;
   precise float v = m.rmipBase + scaled;
   return v;
 }
-// Entry idx of the mesh's layers (bits 16: one word of codes; bits 32: two float words).
-vec2 rmipEntry(MeshGpu m, uint idx) {
+RmipLayerRef rmipLayer(MeshGpu m, int index) {
+  ivec4 L = rmipLayers[m.rmipLayers + uint(index)];  // offset, nx, shiftX, shiftY
+  return RmipLayerRef(uint(L.x), L.y, L.z, L.w);
+}
+void rmipJoin(MeshGpu m, uint idx, inout vec2 r) {
+  vec2 v;
   if (m.rmipBits == 16) {
     uint w = rmipWordAt(m.rmipData + idx, m.chunkShift);
-    return vec2(rmipDecode(m, w & 0xffffu), rmipDecode(m, w >> 16));
+    v = vec2(rmipDecode(m, w & 0xffffu), rmipDecode(m, w >> 16));
+  } else {
+    uint at = m.rmipData + 2u * idx;
+    v = vec2(uintBitsToFloat(rmipWordAt(at, m.chunkShift)), uintBitsToFloat(rmipWordAt(at + 1u, m.chunkShift)));
   }
-  uint at = m.rmipData + 2u * idx;
-  return vec2(uintBitsToFloat(rmipWordAt(at, m.chunkShift)), uintBitsToFloat(rmipWordAt(at + 1u, m.chunkShift)));
-}
-vec2 rmipBlock(MeshGpu m, int x0, int x1, int y0, int y1) {
-  int p = clamp(findMSB(x1 - x0 + 1), m.rmipFirst, m.rmipP);
-  int q = clamp(findMSB(y1 - y0 + 1), m.rmipFirst, m.rmipQ);
-  ivec4 L = rmipLayers[m.rmipLayers + uint(p * (m.rmipQ + 1) + q)];  // offset, nx, shiftX, shiftY
-  int lx = 1 << p, ly = 1 << q;
-  int rw = m.rmipW, rh = m.rmipH;
-  vec2 r = vec2(kInfF, -kInfF);
-  for (int cy = y0;; cy += ly) {
-    bool lastY = cy + ly - 1 >= y1;
-    if (lastY) cy = max(y1 - ly + 1, y0);
-    uint row = uint((cy >= rh ? cy - rh : cy) >> L.w) * uint(L.y);
-    for (int cx = x0;; cx += lx) {
-      bool lastX = cx + lx - 1 >= x1;
-      if (lastX) cx = max(x1 - lx + 1, x0);
-      vec2 v = rmipEntry(m, uint(L.x) + row + uint((cx >= rw ? cx - rw : cx) >> L.z));
-      r.x = v.x < r.x ? v.x : r.x;
-      r.y = r.y < v.y ? v.y : r.y;
-      if (lastX) break;
-    }
-    if (lastY) break;
-  }
-  return r;
+  r.x = v.x < r.x ? v.x : r.x;
+  r.y = r.y < v.y ? v.y : r.y;
 }
 vec2 rmipRawRange(MeshGpu m, int sx0, int sy0, int sx1, int sy1) {
-  int x0, x1, y0, y1;
-  int rw = m.rmipW, rh = m.rmipH;
-  toPixels(m, sx0, sx1, m.W, rw, x0, x1);
-  toPixels(m, sy0, sy1, m.H, rh, y0, y1);
-  // Wrapping corners stored, or no crossing: one block. Else split at the border (one
-  // call site for rmipBlock: the shader is inlined).
-  bool one = m.rmipWrap != 0 || (x1 < rw && y1 < rh);
-  int xa[2] = int[2](x0, 0), xb[2] = int[2](one ? x1 : min(x1, rw - 1), x1 - rw);
-  int ya[2] = int[2](y0, 0), yb[2] = int[2](one ? y1 : min(y1, rh - 1), y1 - rh);
-  int nb = one || y1 < rh ? 1 : 2, na = one || x1 < rw ? 1 : 2;
+  RmipGeom g = RmipGeom(m.rmipF, m.W, m.H, m.rmipW, m.rmipH, m.rmipP, m.rmipQ, m.rmipFirst, m.rmipWrap != 0);
   vec2 r = vec2(kInfF, -kInfF);
-  for (int b = 0; b < nb; ++b)
-    for (int a = 0; a < na; ++a) {
-      vec2 v = rmipBlock(m, xa[a], xb[a], ya[b], yb[b]);
-      r.x = min(r.x, v.x);
-      r.y = max(r.y, v.y);
-    }
+  rmipRange(m, g, sx0, sy0, sx1, sy1, r);
   return r;
 }
 // LodBandQuery::rawRange: under a λ per ray, the hull of this level's range and the
