@@ -14,8 +14,10 @@
 // own double value (the SPIR-V holds the double 1e-05, not the float 1e-05f), so both
 // sides compute with the same values.
 //
-// The kernels of this folder keep their structural literals (0, 1, 2, 3 in formulas; one
-// copy, both languages); every tolerance and threshold is here.
+// Here: every tunable threshold and every value the driver's loop (written per language)
+// uses. The kernels of this folder keep the rounding allowances of their own formulas
+// beside the formula they bound (patch_math.h's root pads, prism.h's crossing tolerance,
+// rect_bounds.h's norm bounds): one copy, compiled by both languages.
 #ifndef OBLONG_TRAVERSAL_CONSTANTS_H
 #define OBLONG_TRAVERSAL_CONSTANTS_H
 

@@ -1,9 +1,11 @@
 // RMIP layers for the GPU: a copy of the built Rmip's entries and layer table (the CPU
-// traversal's own range query, so there is one build), and the query of Rmip::rawRange
-// as the shader runs it (checked against Rmip by tests/vulkan_test.cpp).
+// traversal's own range query, so there is one build), and the query kernel
+// (core/kernels/rmip_query.h) over them as the shader reads them (checked against Rmip by
+// tests/vulkan_test.cpp).
 #include "render/vulkan/rmip_layout.h"
 
 #include "core/error.h"
+#include "core/kernels/rmip_query.h"
 #include "strategies/rmip.h"
 
 #include <algorithm>
@@ -14,7 +16,25 @@ namespace oblong::vk {
 
 namespace {
 
-int log2floor(int v) { return int(std::bit_width(unsigned(v))) - 1; }
+// The shader's storage (traversal.glsl rmipLayer / rmipJoin) for the query kernel: each
+// entry decoded (the CPU joins codes and decodes once; the decode is monotone, so both
+// give the same interval).
+struct LayoutAccess {
+  const RmipLayout* L;
+};
+shared::RmipLayerRef rmipLayer(const LayoutAccess& a, int index) {
+  const glm::ivec4& l = a.L->layers[size_t(index)];
+  return {uint32_t(l.x), l.y, l.z, l.w};
+}
+void rmipJoin(const LayoutAccess& a, uint32_t idx, Interval& acc) {
+  const RmipLayout& L = *a.L;
+  if (L.bits == 16) {
+    const uint32_t w = L.words[idx];
+    acc.extend(Interval{L.q.decode(w & 0xffffu), L.q.decode(w >> 16)});
+  } else {
+    acc.extend(Interval{std::bit_cast<float>(L.words[2 * size_t(idx)]), std::bit_cast<float>(L.words[2 * size_t(idx) + 1])});
+  }
+}
 
 }  // namespace
 
@@ -41,50 +61,9 @@ RmipLayout RmipLayout::of(const Rmip& rmip) {
 }
 
 Interval RmipLayout::rawRange(const HeightMap& m, const SampleRange& r) const {
-  auto toPixels = [&](int a0, int a1, int size, int n, int& s, int& e) {
-    wrapAxis(a0, a1, size, s, e);
-    if (f == 1) return;
-    e = e < size ? e / f : n + (e - size) / f;
-    s /= f;
-    if (e - s + 1 >= n) s = 0, e = n - 1;
-  };
-  // traversal.glsl rmipEntry: decodes each entry (the CPU joins codes and decodes once;
-  // the decode is monotone, so both give the same interval).
-  auto entry = [&](size_t idx) {
-    if (bits == 16) {
-      const uint32_t w = words[idx];
-      return Interval{q.decode(w & 0xffffu), q.decode(w >> 16)};
-    }
-    return Interval{std::bit_cast<float>(words[2 * idx]), std::bit_cast<float>(words[2 * idx + 1])};
-  };
-  auto block = [&](int x0, int x1, int y0, int y1) {
-    const int p = std::clamp(log2floor(x1 - x0 + 1), p0, P), q = std::clamp(log2floor(y1 - y0 + 1), p0, Q);
-    const glm::ivec4 L = layers[size_t(p) * (Q + 1) + q];
-    const int lx = 1 << p, ly = 1 << q;
-    Interval out;
-    for (int cy = y0;; cy += ly) {
-      const bool lastY = cy + ly - 1 >= y1;
-      if (lastY) cy = std::max(y1 - ly + 1, y0);
-      const size_t row = size_t((cy >= rh ? cy - rh : cy) >> L.w) * L.y;
-      for (int cx = x0;; cx += lx) {
-        const bool lastX = cx + lx - 1 >= x1;
-        if (lastX) cx = std::max(x1 - lx + 1, x0);
-        out.extend(entry(L.x + row + ((cx >= rw ? cx - rw : cx) >> L.z)));
-        if (lastX) break;
-      }
-      if (lastY) break;
-    }
-    return out;
-  };
-  int x0, x1, y0, y1;
-  toPixels(r.x0, r.x1, m.width(), rw, x0, x1);
-  toPixels(r.y0, r.y1, m.height(), rh, y0, y1);
-  if (wrap || (x1 < rw && y1 < rh)) return block(x0, x1, y0, y1);
-  const int xa[2] = {x0, 0}, xb[2] = {std::min(x1, rw - 1), x1 - rw};
-  const int ya[2] = {y0, 0}, yb[2] = {std::min(y1, rh - 1), y1 - rh};
+  const shared::RmipGeom g{f, m.width(), m.height(), rw, rh, P, Q, p0, wrap};
   Interval out;
-  for (int b = 0; b < (y1 < rh ? 1 : 2); ++b)
-    for (int a = 0; a < (x1 < rw ? 1 : 2); ++a) out.extend(block(xa[a], xb[a], ya[b], yb[b]));
+  shared::rmipRange(LayoutAccess{this}, g, r.x0, r.y0, r.x1, r.y1, out);
   return out;
 }
 

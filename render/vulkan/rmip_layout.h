@@ -1,8 +1,9 @@
 // The RMIP layers (strategies/rmip.h) laid out for the GPU: the built Rmip's own entries
 // and layer table (Rmip::layerEntries(), Rmip::layerTable()) in the shader's formats, so the
 // shader's query reads exactly the CPU's data and returns the CPU's interval bit for bit.
-// RmipLayout::rawRange is the shader's lookup (traversal.glsl rmipRawRange) on the host,
-// checked against Rmip's own query by tests/vulkan_test.cpp.
+// RmipLayout::rawRange is the shader's lookup (the kernel core/kernels/rmip_query.h over
+// these buffers, decoded per entry as traversal.glsl reads them) on the host, checked
+// against Rmip's own query by tests/vulkan_test.cpp.
 #pragma once
 
 #include "core/heightmap.h"
