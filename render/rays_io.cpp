@@ -56,6 +56,11 @@ float parseFloat(const std::string& f, const std::string& where, const char* fie
 // or underflow.
 constexpr double kMinDirection = 1.0 / double(1ull << 40), kMaxDirection = double(1ull << 40);
 
+// Ray files are read to the end: a FIFO would block, a device never ends.
+void checkRegular(const std::string& path) { checkInputFile(path); }
+
+}  // namespace
+
 void checkRay(const Ray& r, const std::string& where) {
   for (int a = 0; a < 3; ++a)
     if (!std::isfinite(r.o[a]) || !std::isfinite(r.d[a])) fail(where, "ray origin and direction must be finite");
@@ -72,11 +77,6 @@ void checkRay(const Ray& r, const std::string& where) {
     fail(where, "need finite tmin <= tmax (tmax may be inf), got [{}, {}]", r.tmin, r.tmax);
   if (r.tmin < 0.0f) fail(where, "tmin must be >= 0, got {}", r.tmin);
 }
-
-// Ray files are read to the end: a FIFO would block, a device never ends.
-void checkRegular(const std::string& path) { checkInputFile(path); }
-
-}  // namespace
 
 std::vector<Ray> readRays(const std::string& path) {
   checkRegular(path);

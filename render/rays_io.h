@@ -19,6 +19,9 @@ namespace oblong {
 // header, wrong field count, non-numeric or non-finite values (tmax may be inf),
 // zero direction, tmin > tmax, a .bin size not a multiple of 32 bytes.
 std::vector<Ray> readRays(const std::string& path);
+// One ray as readRays checks it (finite, within the coordinate limit, a normalisable
+// direction, 0 <= tmin <= tmax); throws oblong::Error naming `where`.
+void checkRay(const Ray& r, const std::string& where);
 void writeRays(const std::string& path, const std::vector<Ray>& rays);  // by extension
 void writeHits(const std::string& path, const std::vector<Hit>& hits);
 std::vector<Hit> readHits(const std::string& path);  // t, mesh, prim, uv only

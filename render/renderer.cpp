@@ -299,7 +299,7 @@ RenderResult render(const Scene& scene, const TraceBackend& backend, const Rende
 }
 
 TraceResult traceRays(const TraceBackend& backend, const std::vector<Ray>& rays, int threads,
-                      const std::atomic<bool>* interrupt) {
+                      const std::atomic<bool>* interrupt, std::vector<RayCounters>* perRay) {
   // In batches, so that Ctrl-C is answered within one batch and a device's staging
   // memory stays bounded; each ray's answer does not depend on its batch.
   constexpr size_t kBatch = size_t(1) << 18;
@@ -307,11 +307,18 @@ TraceResult traceRays(const TraceBackend& backend, const std::vector<Ray>& rays,
   if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
   TraceResult res;
   res.hits.resize(rays.size());
-  std::vector<RayCounters> work;
+  std::vector<RayCounters> batchWork;
+  if (perRay) perRay->assign(rays.size(), RayCounters{});
   for (size_t b = 0; b < rays.size(); b += kBatch) {
     if (interrupt && interrupt->load()) break;
     const size_t n = std::min(kBatch, rays.size() - b);
-    work.assign(n, RayCounters{});
+    std::span<RayCounters> work;
+    if (perRay) {
+      work = std::span<RayCounters>(*perRay).subspan(b, n);
+    } else {
+      batchWork.assign(n, RayCounters{});
+      work = batchWork;
+    }
     res.seconds += backend.traceHits(RayKind::Camera, std::span<const Ray>(rays).subspan(b, n),
                                      std::span<Hit>(res.hits).subspan(b, n), work);
     for (const RayCounters& c : work) res.counters += c;

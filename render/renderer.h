@@ -114,8 +114,9 @@ struct TraceResult {
   double seconds = 0;    // the backend's (TraceBackend::traceHits)
   bool interrupted = false;
 };
+// `perRay`, when given, receives each ray's own work (one entry per ray).
 TraceResult traceRays(const TraceBackend& backend, const std::vector<Ray>& rays, int threads = 0,
-                      const std::atomic<bool>* interrupt = nullptr);
+                      const std::atomic<bool>* interrupt = nullptr, std::vector<RayCounters>* perRay = nullptr);
 
 // Throws oblong::Error, before any work, when the host memory of the bands schedule
 // (render() on a backend that is not concurrent) does not fit: the per-pixel sums and

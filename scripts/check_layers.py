@@ -23,6 +23,7 @@ LAYERS = [
     ("traversal", 3, "the method: driver, RayPatch, prisms, psi, bounds, micro-triangles, baselines"),
     ("render", 4, "Embree and Vulkan scenes, cameras, images, the integrators, output"),
     ("render/apps", 5, "the programs: oblong, oblong_vkbench"),
+    ("render/python", 5, "the Python module oblong"),
     ("tests/fixtures", 5, "scenes, rays and stiff inputs shared by tests and experiments"),
     ("tests", 6, "unit, conformance and CLI tests"),
     ("experiments", 6, "benchmarks and the paper's experiments"),

@@ -8,11 +8,15 @@ cd "$(dirname "$0")/.."
 purpose="${1:?usage: scripts/configure.sh demo|release|asan BUILD_DIR}"
 dir="${2:?usage: scripts/configure.sh demo|release|asan BUILD_DIR}"
 case "$purpose" in
-  demo)    opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=OFF -DOBLONG_BUILD_BENCHMARKS=OFF) ;;
-  release) opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=ON -DOBLONG_REQUIRE_VULKAN=ON) ;;
+  # The Python module is built wherever pybind11 is found (the demo's folder then becomes
+  # the tests' without recompiling: the same position-independent code); the tests'
+  # build requires it (OBLONG_REQUIRE_PYTHON) and tests it.
+  demo)    opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=OFF -DOBLONG_BUILD_BENCHMARKS=OFF -DOBLONG_PYTHON=ON -DOBLONG_REQUIRE_PYTHON=OFF) ;;
+  release) opts=(-DCMAKE_BUILD_TYPE=Release -DOBLONG_SANITIZE=OFF -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=ON -DOBLONG_REQUIRE_VULKAN=ON -DOBLONG_PYTHON=ON -DOBLONG_REQUIRE_PYTHON=ON) ;;
   # Sanitizer build: unit tests only (benchmarks off), statistics on. The tests' builds
   # require the Vulkan path (OBLONG_REQUIRE_VULKAN): without it the GPU tests would vanish.
-  asan)    opts=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DOBLONG_SANITIZE=ON -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=OFF -DOBLONG_REQUIRE_VULKAN=ON) ;;
+  # No Python module (CMakeLists.txt says why).
+  asan)    opts=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DOBLONG_SANITIZE=ON -DOBLONG_BUILD_TESTS=ON -DOBLONG_BUILD_BENCHMARKS=OFF -DOBLONG_REQUIRE_VULKAN=ON -DOBLONG_PYTHON=OFF -DOBLONG_REQUIRE_PYTHON=OFF) ;;
   *) echo "scripts/configure.sh: unknown purpose '$purpose' (demo | release | asan)" >&2; exit 1 ;;
 esac
 cmake -S . -B "$dir" -G Ninja -DOBLONG_STATS=ON "${opts[@]}"

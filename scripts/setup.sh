@@ -16,6 +16,10 @@ PKGS=(
   clang libclang-rt-14-dev
 )
 
+# The Python module (render/python/, docs/python.md) for Debian's /usr/bin/python3: pybind11
+# and the interpreter's headers; pytest runs its tests (tests/python/).
+PKGS+=(pybind11-dev python3-dev python3-pytest)
+
 # Vulkan ray tracing path (render/vulkan/, docs/vulkan.md): headers, loader, glslc and
 # spirv-val from bookworm; Mesa's lavapipe (CPU Vulkan with VK_KHR_ray_tracing_pipeline,
 # Mesa >= 24.1) only from bookworm-backports, so the suite is added and the driver is
