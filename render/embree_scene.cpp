@@ -555,30 +555,31 @@ Hit EmbreeScene::intersect(const Ray& world, RayCounters* counters) const {
   return h;
 }
 
-double EmbreeScene::traceHits(RayKind, std::span<const Ray> rays, std::span<Hit> hits,
-                              std::span<RayCounters> counters) const {
+namespace {
+// Rays in parallel (blocks of 32), each with fresh counters; returns the wall seconds.
+template <typename PerRay>
+double tracePerRay(size_t n, std::span<RayCounters> counters, const PerRay& perRay) {
   const auto start = std::chrono::steady_clock::now();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 32), [&](const tbb::blocked_range<size_t>& b) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 32), [&](const tbb::blocked_range<size_t>& b) {
     for (size_t i = b.begin(); i < b.end(); ++i) {
       RayCounters* c = counters.empty() ? nullptr : &counters[i];
       if (c) *c = RayCounters{};
-      hits[i] = intersect(rays[i], c);
+      perRay(i, c);
     }
   });
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
+}  // namespace
+
+double EmbreeScene::traceHits(RayKind, std::span<const Ray> rays, std::span<Hit> hits,
+                              std::span<RayCounters> counters) const {
+  return tracePerRay(rays.size(), counters, [&](size_t i, RayCounters* c) { hits[i] = intersect(rays[i], c); });
+}
 
 double EmbreeScene::traceOcclusion(RayKind, std::span<const Ray> rays, std::span<uint8_t> blocked,
                                    std::span<RayCounters> counters) const {
-  const auto start = std::chrono::steady_clock::now();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 32), [&](const tbb::blocked_range<size_t>& b) {
-    for (size_t i = b.begin(); i < b.end(); ++i) {
-      RayCounters* c = counters.empty() ? nullptr : &counters[i];
-      if (c) *c = RayCounters{};
-      blocked[i] = occluded(rays[i], c) ? 1 : 0;
-    }
-  });
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return tracePerRay(rays.size(), counters,
+                     [&](size_t i, RayCounters* c) { blocked[i] = occluded(rays[i], c) ? 1 : 0; });
 }
 
 bool EmbreeScene::occluded(const Ray& world, RayCounters* counters) const {

@@ -124,13 +124,8 @@ std::vector<Family> rayFamilies(const Scene& s, const EmbreeScene& oracle, int c
   for (const Ray& r : fam[0].rays) {
     const Hit h = oracle.intersect(r);
     if (!h.valid()) continue;
-    vec3 n = h.ng;
-    if (glm::dot(n, r.d) > 0) n = -n;
-    const vec3 p = r.at(h.t);
-    vec3 d = randomDir(rng);
-    if (glm::dot(d, n) < 0) d = -d;
-    const float eps = 1e-4f * std::max(1.0f, glm::length(p));
-    fam[4].rays.push_back(Ray{p + eps * n, d, 0.0f, kInfinity});
+    const test::Spawn sp = test::spawnAt(r, h.t, h.ng, rng);
+    fam[4].rays.push_back(Ray{sp.p + sp.eps * sp.n, sp.d, 0.0f, kInfinity});
   }
   return fam;
 }

@@ -30,21 +30,6 @@ OBLONG_KERNELS_BEGIN
 #define K_TIE_EPS OBLONG_CUBIC_TIE_EPS_F
 #define K_OUTSIDE_EPS OBLONG_NEWTON_OUTSIDE_EPS
 #include "core/kernels/invert_scalar.h"
-#undef KS
-#undef KS3
-#undef KFrame
-#undef KCubic
-#undef KResult
-#undef KDOT
-#undef KCROSS
-#undef KLENGTH
-#undef KFINITE
-#undef KCOPYSIGN
-#undef KCBRT
-#undef K_DROP_EPS
-#undef K_ROOT_TOL
-#undef K_TIE_EPS
-#undef K_OUTSIDE_EPS
 
 #ifdef __cplusplus
 #define KS double
@@ -63,21 +48,6 @@ OBLONG_KERNELS_BEGIN
 #define K_TIE_EPS OBLONG_CUBIC_TIE_EPS_D
 #define K_OUTSIDE_EPS OBLONG_NEWTON_OUTSIDE_EPS_D
 #include "core/kernels/invert_scalar.h"
-#undef KS
-#undef KS3
-#undef KFrame
-#undef KCubic
-#undef KResult
-#undef KDOT
-#undef KCROSS
-#undef KLENGTH
-#undef KFINITE
-#undef KCOPYSIGN
-#undef KCBRT
-#undef K_DROP_EPS
-#undef K_ROOT_TOL
-#undef K_TIE_EPS
-#undef K_OUTSIDE_EPS
 #endif
 
 OBLONG_KERNELS_END

@@ -4,7 +4,8 @@
 //   KFrame, KCubic, KResult  the struct names of this scalar
 //   KDOT, KCROSS, KLENGTH, KFINITE, KCOPYSIGN, KCBRT  its vector and scalar functions
 //   K_DROP_EPS, K_ROOT_TOL, K_TIE_EPS, K_OUTSIDE_EPS  its precision-dependent constants
-// No include guard: it is meant to be included more than once. Every literal is written
+// No include guard: it is meant to be included more than once, and it undefines those
+// names at its end. Every literal is written
 // KS(...): in C++ an unsuffixed literal would make float arithmetic double.
 
 // T in a local frame at p0 (inversion/inverter.h): F(u,v,s) = e1 u + e2 v + s N(u,v) − W
@@ -340,3 +341,19 @@ OBLONG_INLINE KResult newtonSolve(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) X, KS tol,
   }
   return invFinish(F, u, v, s, conv, newtonIt + it);
 }
+
+#undef KS
+#undef KS3
+#undef KFrame
+#undef KCubic
+#undef KResult
+#undef KDOT
+#undef KCROSS
+#undef KLENGTH
+#undef KFINITE
+#undef KCOPYSIGN
+#undef KCBRT
+#undef K_DROP_EPS
+#undef K_ROOT_TOL
+#undef K_TIE_EPS
+#undef K_OUTSIDE_EPS
