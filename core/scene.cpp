@@ -466,8 +466,8 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
   }
   if (top.has("strategies")) {
     const Reader st = top.object("strategies");
-    st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal", "lod",
-                  "lod_bias"});
+    st.allowOnly({"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal",
+                  "stack_depth", "lod", "lod_bias"});
     parseStrategy(st, "range", s.range);
     parseStrategy(st, "inverter", s.inverter);
     parseStrategy(st, "splitter", s.splitter);
@@ -477,6 +477,12 @@ Scene parseSceneImpl(const json& j, const std::string& path) {
       st.errorAt("marching_scale", "must be positive (texels) and >= {} (smaller only multiplies the work), got {}",
                  kMinMarchingScale, s.marchingScale);
     s.inversionInTraversal = st.boolean("inversion_in_traversal", s.inversionInTraversal);
+    if (st.has("stack_depth")) {
+      const json& v = st.at("stack_depth");
+      if (!v.is_number_integer() || v.get<int64_t>() < 2 || v.get<int64_t>() > OBLONG_TRAV_STACK)
+        st.errorAt("stack_depth", "must be an integer from 2 to {} (entries), got {}", OBLONG_TRAV_STACK, shown(v));
+      s.stackDepth = int(v.get<int64_t>());
+    }
     if (st.has("lod")) {
       const json& v = st.at("lod");
       if (v.is_string() && v.get<std::string>() == "off") s.lod.reset();

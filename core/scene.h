@@ -2,6 +2,8 @@
 // name. The JSON format is documented in docs/scene_format.md.
 #pragma once
 
+#include "core/kernels/constants.h"
+
 #include "core/heightmap.h"
 #include "core/mesh.h"
 
@@ -58,6 +60,7 @@ struct Scene {
   StrategyChoice baseline{"", nlohmann::json::object(), "<default>: strategies.baseline"};
   float marchingScale = 4.0f;        // texels: rectangles at most this size are marched
   bool inversionInTraversal = true;  // invert box intervals to tighten rectangles
+  int stackDepth = OBLONG_TRAV_STACK;  // entries of the traversal's stack it may use
   // Level of detail (docs/lod.md): none = off (full resolution, nothing built), or one
   // λ >= 0 for the whole scene, clamped per map to its last level. The meshes'
   // displacements are already at it (setLod).

@@ -318,6 +318,7 @@ TraversalConfig traversalConfigOf(const Scene& scene) {
   c.baselineParams = scene.baseline.params;
   c.marchingScale = scene.marchingScale;
   c.inversionInTraversal = scene.inversionInTraversal;
+  c.stackDepth = scene.stackDepth;
   c.lodPerRay = scene.lodCone;
   return c;
 }

@@ -84,6 +84,7 @@ nlohmann::json configJson(const AccelOptions& o, const Scene& scene) {
          {"inverter", {{"name", c.inverter}, {"params", c.inverterParams}}},
          {"splitter", {{"name", c.splitter}, {"params", c.splitterParams}}},
          {"marching_scale", c.marchingScale},
+         {"stack_depth", c.stackDepth},
          {"inversion_in_traversal", c.inversionInTraversal}};
     if (!c.baseline.empty()) j["baseline"] = c.baseline;
     if (!c.baselineParams.empty()) j["baseline_params"] = c.baselineParams;

@@ -52,7 +52,7 @@ const char* kValid = R"({
   ],
   "strategies": {"range": {"name": "rmip", "resolution": 64, "lod": false},
                  "inverter": {"name": "cubic"}, "splitter": {"name": "midpoint3d", "depth": 3},
-                 "marching_scale": 2.5, "inversion_in_traversal": false}
+                 "marching_scale": 2.5, "inversion_in_traversal": false, "stack_depth": 16}
 })";
 
 bool near(const vec3& a, const vec3& b) { return glm::length(a - b) < 1e-5f; }
@@ -125,6 +125,7 @@ TEST_CASE("a valid scene round trip", "[scene]") {
   CHECK(s.splitter.where == path + ": strategies.splitter");
   CHECK(s.marchingScale == 2.5f);
   CHECK_FALSE(s.inversionInTraversal);
+  CHECK(s.stackDepth == 16);
 }
 
 TEST_CASE("a map used by several meshes is loaded once", "[scene]") {
@@ -151,6 +152,7 @@ TEST_CASE("defaults: a scene with only a mesh", "[scene]") {
   CHECK(s.splitter.params.empty());
   CHECK(s.marchingScale == 4.0f);
   CHECK(s.inversionInTraversal);
+  CHECK(s.stackDepth == OBLONG_TRAV_STACK);
   REQUIRE(s.meshes.size() == 1);
   CHECK_FALSE(s.meshes[0].displacement);
   // Only some strategy keys: the others keep their defaults.
@@ -245,6 +247,12 @@ TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
        {"strategies.marching_scale", "positive"}},
       {"marching scale as a string", "{" + mesh + R"(, "strategies": {"marching_scale": "4"}})",
        {"strategies.marching_scale", "must be a number"}},
+      {"stack depth too small", "{" + mesh + R"(, "strategies": {"stack_depth": 1}})",
+       {"strategies.stack_depth", "integer from 2 to 128"}},
+      {"stack depth too large", "{" + mesh + R"(, "strategies": {"stack_depth": 129}})",
+       {"strategies.stack_depth", "integer from 2 to 128"}},
+      {"stack depth not an integer", "{" + mesh + R"(, "strategies": {"stack_depth": 8.5}})",
+       {"strategies.stack_depth", "integer from 2 to 128"}},
       {"inversion flag not a bool", "{" + mesh + R"(, "strategies": {"inversion_in_traversal": 1}})",
        {"strategies.inversion_in_traversal", "true or false"}},
       {"image too large", "{" + mesh + R"(, "image": {"width": 1048576, "height": 1048576}})",

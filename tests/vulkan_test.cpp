@@ -857,3 +857,61 @@ TEST_CASE("vulkan: Ctrl-C keeps what was rendered, a render beyond memory is ref
   }
   fs::remove_all(dir);
 }
+
+// The stack's overflow branch (RayPatch: a push that would overflow marches the piece, or
+// tests the box's cells one by one, instead), which the full depth of OBLONG_TRAV_STACK
+// entries never meets: with TraversalConfig::stackDepth = 4 on both sides, over the deep
+// hierarchies of the tiled quad and the torus, the CPU stays exact (the brute force's
+// hits) and the GPU runs it step for step.
+TEST_CASE("vulkan: a shallow stack overflows alike on the CPU and the GPU, and stays exact", "[vulkan]") {
+  vulkanTestEnv();
+  const std::map<std::string, int64_t> stats0 = Stats::snapshot();
+  TraversalConfig cfg;
+  cfg.stackDepth = 4;
+  TraversalConfig oracle;
+  oracle.baseline = "bruteforce";
+  AccelOptions ao;
+  ao.traversal = cfg;
+  StepParity total;
+  int exact = 0, checked = 0;
+  uint32_t seed = 77;
+  for (const test::Scenario& s : {test::tiledQuad(), test::torus()}) {
+    for (size_t k = 0; k < 2; ++k) {
+      const DisplacedTriangle& T = s.tris[(2 * k + 1) * s.tris.size() / 4];
+      const test::Scenario one{s.name, {T}, s.disp};
+      const auto cpu = createIntersector(cfg, one.tris, one.disp);
+      const auto bf = createIntersector(oracle, one.tris, one.disp);
+      const AABB box = cpu->bounds(0);
+      std::vector<Ray> rays;
+      for (const test::RayCase& c : test::rayFamilies(one, *bf, 16, seed++)) rays.push_back(c.r);
+      const Scene scene = oneTriangleScene(T, s.disp);
+      vk::VulkanScene gpu(scene, ao);
+      const SceneReach reach = sceneReach(scene);
+      std::vector<RayCounters> gw;
+      const std::vector<Hit> g = gpu.trace(rays, &gw);
+      for (size_t i = 0; i < rays.size(); ++i) {
+        const NearRay near = nearScene(rays[i], reach);
+        const RayParity rp = compareRay(*cpu, box, near, g[i], gw[i]);
+        total.add(rp.p);
+        if (near.misses || near.shift != 0) continue;  // the oracle on rays as given
+        TriangleHit hb;
+        const bool bh = test::closest(*bf, near.ray, hb);
+        ++checked;
+        exact += bh == rp.hit && (!bh || hb.t == rp.h.t);
+      }
+    }
+  }
+  fmt::print("vulkan shallow stack: {}; CPU equal to the brute force on {} of {} rays\n", total.text(), exact, checked);
+  CHECK(total.rays > 0);
+  CHECK(total.agree == total.rays);
+  CHECK(total.bitT == total.rays);
+  CHECK(total.sameWork == total.rays);
+  CHECK(exact == checked);
+  const std::map<std::string, int64_t> stats1 = Stats::snapshot();
+  if (!stats1.empty()) {
+    const auto a = stats0.find("traversal/StackOverflows"), b = stats1.find("traversal/StackOverflows");
+    const int64_t overflows = (b == stats1.end() ? 0 : b->second) - (a == stats0.end() ? 0 : a->second);
+    fmt::print("vulkan shallow stack: traversal/StackOverflows {}\n", overflows);
+    CHECK(overflows > 0);
+  }
+}

@@ -52,6 +52,8 @@ void checkMarchingScale(const TraversalConfig& cfg) {
   if (!(cfg.marchingScale >= kMinMarchingScale) || !std::isfinite(cfg.marchingScale))
     fail("traversal", "marching scale must be a finite number of texels >= {} (smaller only multiplies the work), got {}",
          kMinMarchingScale, cfg.marchingScale);
+  if (!(cfg.stackDepth >= 2 && cfg.stackDepth <= OBLONG_TRAV_STACK))
+    fail("traversal", "stack depth must be 2 to {} entries, got {}", OBLONG_TRAV_STACK, cfg.stackDepth);
 }
 
 std::vector<Rect> uvBoxes(const std::vector<DisplacedTriangle>& triangles) {
@@ -81,7 +83,7 @@ std::unique_ptr<Intersector> assembleTraversal(const TraversalConfig& cfg, std::
   parts.rangeParams = std::move(rangeParams);
   parts.inverterParams = ips.resolved();
   parts.splitterParams = sps.resolved();
-  parts.opt = TraversalOptions{cfg.marchingScale, cfg.inversionInTraversal};
+  parts.opt = TraversalOptions{cfg.marchingScale, cfg.inversionInTraversal, cfg.stackDepth};
   for (const StaticTraversal& st : staticTraversals())
     if (st.matches(parts)) return st.make(std::move(parts));
   return makeGenericTraversal(std::move(parts));
@@ -122,7 +124,8 @@ nlohmann::json TraversalIntersectorBase::describe() const {
           {"inverter", {{"name", std::string(inv_->name())}, {"params", params_[1]}}},
           {"splitter", {{"name", std::string(split_->name())}, {"params", params_[2]}}},
           {"marching_scale", opt_.marchingScale},
-          {"inversion_in_traversal", opt_.inversionInTraversal}};
+          {"inversion_in_traversal", opt_.inversionInTraversal},
+          {"stack_depth", opt_.stackDepth}};
 }
 
 }  // namespace oblong

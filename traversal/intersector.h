@@ -4,6 +4,8 @@
 // micro-geometry. The Embree callback is one indirect call per ray/prism pair.
 #pragma once
 
+#include "core/kernels/constants.h"
+
 #include "core/heightmap.h"
 #include "core/math.h"
 #include "core/memory.h"
@@ -42,6 +44,11 @@ struct TraversalConfig {
   std::string splitter = "midpoint2d"; // Splitter name
   float marchingScale = 4.0f;          // texels: rectangles at most this size are marched
   bool inversionInTraversal = true;    // invert box intervals to tighten rectangles (Fig. 12)
+  // Entries of the per-ray, per-prism stack the traversal may use, 2..OBLONG_TRAV_STACK:
+  // a push beyond it marches (or tests cell by cell) instead, on the CPU and the GPU alike.
+  // A bound on a shader's local memory to study, and how the tests reach the overflow
+  // branch, which the full depth never meets.
+  int stackDepth = OBLONG_TRAV_STACK;
   // "" (the traversal above) or a registered baseline (BaselineRegistry below):
   // "bruteforce" (every micro-triangle of the prism's triangle: the oracle), "tfdm"
   // (Thonat et al. 2021's quad-tree traversal), "fixedstep" (PDM-style constant-step

@@ -98,6 +98,7 @@ inline bool split(const Split& s, const CurvePiece& p, Ctx& ctx, CurvePiece& f, 
 struct TraversalOptions {
   float marchingScale = 4.0f;
   bool inversionInTraversal = true;
+  int stackDepth = OBLONG_TRAV_STACK;  // entries used of kStack (TraversalConfig::stackDepth)
 };
 
 // One ray against one displaced triangle: the state of Alg. 1 and the splitters'
@@ -559,7 +560,7 @@ class RayPatch final : public SplitContext {
       if (small()) return leaf(p);
     }
     CurvePiece front, back;
-    if (stackSize_ + 2 > kStack) {
+    if (stackSize_ + 2 > opt_.stackDepth) {
       OBLONG_STAT_INC(travOverflows);
       return march(p);  // correct, just not hierarchical (a box would need a slot too)
     }
@@ -581,7 +582,7 @@ class RayPatch final : public SplitContext {
       return testCells(e.clo, e.chi);
     double t0 = e.ta, t1 = std::min(e.tb, limit);
     if (!clipToCells(e.clo, e.chi, t0, t1)) return;
-    if (stackSize_ + 2 > kStack) {
+    if (stackSize_ + 2 > opt_.stackDepth) {
       OBLONG_STAT_INC(travOverflows);
       return testCells(e.clo, e.chi);
     }

@@ -130,6 +130,8 @@ struct MeshGpu {
   float rmipBase, rmipStep;    // Rmip::quantizer() (bits 16)
   float marchingScale;
   int inversionInTraversal;  // TraversalConfig::inversionInTraversal
+  int stackDepth;            // TraversalConfig::stackDepth
+  int pad0;
   int displaced;
   int chunkShift;   // log2 of the elements per texel / RMIP buffer (OBLONG_CHUNKS)
   uint indexOffset;  // plain: first index (3 per triangle)

@@ -21,7 +21,7 @@
 
 namespace oblong::vk {
 
-inline constexpr uint32_t kBakeVersion = 6;  // 6: boxes in the texture frame (TriGpu::texAxis, ...)
+inline constexpr uint32_t kBakeVersion = 7;  // 7: MeshGpu::stackDepth; 6: boxes in the texture frame (TriGpu::texAxis, ...)
 
 struct BakedScene {
   GpuRecords records;

@@ -21,7 +21,7 @@ using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1472 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 152 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 160 && sizeof(PushGpu) == 16);
 
 namespace {
 
@@ -189,6 +189,7 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
     m.scale = d.scale, m.bias = d.bias, m.tiling = d.tiling;
     m.marchingScale = cfg.marchingScale;
     m.inversionInTraversal = cfg.inversionInTraversal;
+    m.stackDepth = cfg.stackDepth;
     m.lodNext = -1;
     if (const auto* perRay = dynamic_cast<const PerRayLod*>(is.get())) {
       // A λ per ray: one record per level (its map, RMIP and triangles), after the

@@ -497,7 +497,7 @@ void processPiece(CurvePoint a, CurvePoint b) {
         leafPiece(a, b);
         return;
       }
-      if (g_sp + 2 > OBLONG_TRAV_STACK) {  // overflow: correct, just not hierarchical
+      if (g_sp + 2 > g_mesh.stackDepth) {  // overflow: correct, just not hierarchical
         startMarch(a, b);
         return;
       }
@@ -542,7 +542,7 @@ void processBox(ivec2 clo, ivec2 chi, double ta, double tb) {
   }
   double t0 = ta, t1 = min(tb, limit);
   if (!clipToCells(clo, chi, t0, t1)) return;
-  if (g_sp + 2 > OBLONG_TRAV_STACK) {
+  if (g_sp + 2 > g_mesh.stackDepth) {
     startCells(clo, chi);
     return;
   }
