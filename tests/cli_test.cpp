@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -387,4 +389,76 @@ TEST_CASE("oblong render and info with a level of detail per ray", "[cli][lod]")
   CHECK(mean > 0.5);
   CHECK(mean < 7.0);
   CHECK(j.at("lod_per_ray").at("camera_at_0").get<double>() < 1.0);
+}
+
+TEST_CASE("oblong trace -o hits.bin writes the binary hits of the CSV", "[cli][trace]") {
+  const auto dir = oblong::test::scratchDir("cli_trace_bin");
+  // Camera-like rays (hits) and some pointing up, away from the scene (misses).
+  auto rays = someRays(300);
+  for (int i = 0; i < 20; ++i) rays.push_back(oblong::Ray{oblong::vec3(0.1f * float(i), 2.0f, 0.0f),
+                                                          oblong::vec3(0.0f, 1.0f, 0.0f), 0.0f, oblong::kInfinity});
+  const std::string bin = (dir / "rays.bin").string(), csv = (dir / "hits.csv").string(),
+                    hitsBin = (dir / "hits.bin").string();
+  oblong::writeRays(bin, rays);
+  Run r = run("trace --rays " + bin + " -o " + csv);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  r = run("trace --rays " + bin + " -o " + hitsBin);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  CHECK_THAT(r.out, Catch::Contains("-> " + hitsBin));
+  // 20 bytes per ray, not text.
+  REQUIRE(std::filesystem::file_size(hitsBin) == 20 * rays.size());
+  const std::string bytes = oblong::test::slurp(hitsBin);
+  CHECK(bytes.rfind("t,mesh", 0) != 0);
+  const auto a = oblong::readHits(csv), b = oblong::readHits(hitsBin);
+  REQUIRE(a.size() == rays.size());
+  REQUIRE(b.size() == rays.size());
+  size_t hit = 0, miss = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    INFO("ray " << i);
+    CHECK(a[i].valid() == b[i].valid());
+    CHECK(a[i].t == b[i].t);  // %.9g round-trips a float: the same bits
+    CHECK(a[i].mesh == b[i].mesh);
+    CHECK(a[i].prim == b[i].prim);
+    CHECK(a[i].uv == b[i].uv);
+    // The record itself: t, mesh, prim, u, v; a miss is inf, -1, -1, 0, 0.
+    float t, u, v;
+    int32_t mesh, prim;
+    std::memcpy(&t, bytes.data() + 20 * i, 4);
+    std::memcpy(&mesh, bytes.data() + 20 * i + 4, 4);
+    std::memcpy(&prim, bytes.data() + 20 * i + 8, 4);
+    std::memcpy(&u, bytes.data() + 20 * i + 12, 4);
+    std::memcpy(&v, bytes.data() + 20 * i + 16, 4);
+    CHECK(t == a[i].t);
+    CHECK(mesh == a[i].mesh);
+    CHECK(prim == a[i].prim);
+    if (a[i].valid()) {
+      ++hit;
+      CHECK(u == a[i].uv.x);
+      CHECK(v == a[i].uv.y);
+    } else {
+      ++miss;
+      CHECK(t == oblong::kInfinity);
+      CHECK(mesh == -1);
+      CHECK(prim == -1);
+      CHECK(u == 0.0f);
+      CHECK(v == 0.0f);
+    }
+  }
+  CHECK(hit > 0);
+  CHECK(miss > 0);
+  // writeHits then readHits round-trips, and a malformed binary file is one error naming it.
+  const std::string again = (dir / "again.bin").string();
+  oblong::writeHits(again, b);
+  CHECK(oblong::test::slurp(again) == bytes);
+  const std::string odd = (dir / "odd.bin").string();
+  std::ofstream(odd) << bytes.substr(0, 30);
+  CHECK_THROWS_WITH(oblong::readHits(odd), Catch::Contains(odd) && Catch::Contains("multiple of 20"));
+  std::string corrupt = bytes.substr(0, 20);
+  const int32_t minusTwo = -2;
+  std::memcpy(corrupt.data() + 4, &minusTwo, 4);
+  const std::string bad = (dir / "bad.bin").string();
+  std::ofstream(bad) << corrupt;
+  CHECK_THROWS_WITH(oblong::readHits(bad), Catch::Contains(bad) && Catch::Contains("hit 0"));
 }

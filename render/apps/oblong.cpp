@@ -2,7 +2,7 @@
 //   oblong render [SCENE.json] -o out.png [--size WxH] [--spp N] [--integrator primary|ao|path] [--seed S]
 //                 [--normals micro|smooth] [--threads N] [--aovs out.exr] [--heatmap steps.png]
 //                 [--stats out.json] [strategy flags]
-//   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv [--stats out.json] [strategy flags]
+//   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv|.bin [--stats out.json] [strategy flags]
 //   oblong info   [SCENE.json] [--range NAME] | --strategies [--json]
 //   oblong bake   [SCENE.json] -o SCENE.oblg [--size WxH] [--rays RAYS] [strategy flags]
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
@@ -284,7 +284,8 @@ int main(int argc, char** argv) {
   trace->add_option("--rays", raysPath, "rays: CSV (ox,oy,oz,dx,dy,dz,tmin,tmax) or .bin (8 float32 per ray)")
       ->required();
   auto* traceOut = trace->add_option("-o,--output", hitsPath,
-                                     "hits: CSV (t,mesh,prim,u,v; t in units of |d|, u,v texture coordinates)");
+                                     "hits: CSV (t,mesh,prim,u,v; t in units of |d|, u,v texture coordinates) or "
+                                     ".bin (t float32, mesh, prim int32, u, v float32 per ray)");
   trace->add_option("--threads", threads, "worker threads (0: all cores)");
   trace->add_option("--stats", statsPath, "write configuration, timings, counters and memory as JSON");
   addStrategyFlags(trace, flags);
