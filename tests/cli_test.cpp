@@ -391,6 +391,51 @@ TEST_CASE("oblong render and info with a level of detail per ray", "[cli][lod]")
   CHECK(j.at("lod_per_ray").at("camera_at_0").get<double>() < 1.0);
 }
 
+TEST_CASE("oblong --version prints the version --stats records", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_version");
+  const std::string stats = (dir / "stats.json").string();
+  const Run v = run("--version");
+  INFO(v.out << v.err);
+  CHECK(v.status == 0);
+  CHECK(v.err.empty());
+  REQUIRE(run("render --size 8x6 --threads 1 -q -o " + (dir / "x.png").string() + " --stats " + stats).status == 0);
+  std::ifstream f(stats);
+  const std::string version = nlohmann::json::parse(f).at("version").get<std::string>();
+  CHECK(!version.empty());
+  CHECK(v.out == "oblong " + version + "\n");
+  // Without a command, still one error line.
+  const Run none = run("");
+  CHECK(none.status == 1);
+  CHECK(lines(none.err) == 1);
+  CHECK_THAT(none.err, Catch::Contains("A subcommand is required"));
+}
+
+TEST_CASE("-q prints nothing but warnings and errors", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_quiet");
+  const std::string png = (dir / "q.png").string(), stats = (dir / "q.json").string();
+  const std::string csv = (dir / "rays.csv").string(), hits = (dir / "hits.csv").string();
+  oblong::writeRays(csv, someRays(50));
+  for (const std::string& args : {"render --size 16x12 --threads 1 -o " + png + " --stats " + stats,
+                                  "trace --rays " + csv + " -o " + hits + " --stats " + stats}) {
+    std::filesystem::remove(stats);
+    const Run loud = run(args), quiet = run(args + " -q"), longForm = run(args + " --quiet");
+    INFO(args << "\n" << loud.out << loud.err << quiet.out << quiet.err);
+    REQUIRE(loud.status == 0);
+    CHECK(!loud.out.empty());
+    CHECK(quiet.status == 0);
+    CHECK(quiet.out.empty());
+    CHECK(quiet.err.empty());
+    CHECK(longForm.status == 0);
+    CHECK(longForm.out.empty());
+    CHECK(std::filesystem::exists(stats));  // files are written as without -q
+  }
+  // Errors still reach stderr under -q.
+  const Run bad = run("trace -q --rays " + (dir / "missing.csv").string() + " -o " + hits);
+  CHECK(bad.status == 1);
+  CHECK(lines(bad.err) == 1);
+  CHECK(bad.out.empty());
+}
+
 TEST_CASE("oblong trace -o hits.bin writes the binary hits of the CSV", "[cli][trace]") {
   const auto dir = oblong::test::scratchDir("cli_trace_bin");
   // Camera-like rays (hits) and some pointing up, away from the scene (misses).
@@ -461,4 +506,31 @@ TEST_CASE("oblong trace -o hits.bin writes the binary hits of the CSV", "[cli][t
   const std::string bad = (dir / "bad.bin").string();
   std::ofstream(bad) << corrupt;
   CHECK_THROWS_WITH(oblong::readHits(bad), Catch::Contains(bad) && Catch::Contains("hit 0"));
+}
+
+TEST_CASE("--heatmap without any traversal step warns instead of writing a black map silently", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_heatmap");
+  const std::string png = (dir / "img.png").string(), heat = (dir / "steps.png").string();
+  const std::string plain = (dir / "plain.json").string();
+  std::ofstream(plain) << R"({"camera": {"from": [0, 2, 3], "to": [0, 0, 0]},
+                             "meshes": [{"shape": {"type": "plane", "size": 2}}]})";
+  const std::string common = " --size 16x12 --threads 1 --integrator primary -o " + png + " --heatmap " + heat;
+  const Run displaced = run("render" + common);
+  INFO(displaced.out << displaced.err);
+  REQUIRE(displaced.status == 0);
+  CHECK(displaced.err.empty());
+  const Run undisplaced = run("render " + plain + common);
+  INFO(undisplaced.out << undisplaced.err);
+  REQUIRE(undisplaced.status == 0);
+  CHECK(undisplaced.err == "oblong: warning: --heatmap " + heat +
+                               ": no camera ray took a traversal step (the scene has no displaced mesh; undisplaced "
+                               "meshes are plain triangles): the map is black\n");
+  CHECK(std::filesystem::exists(heat));  // written all the same, as asked
+  // Kept under -q; the tessellated baseline counts no steps either.
+  const Run tess = run("render" + common + " --baseline tessellated -q");
+  INFO(tess.out << tess.err);
+  REQUIRE(tess.status == 0);
+  CHECK(tess.out.empty());
+  CHECK(lines(tess.err) == 1);
+  CHECK_THAT(tess.err, Catch::Contains("--baseline tessellated traces plain triangles"));
 }
