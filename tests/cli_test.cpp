@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstring>
 #include <cstdlib>
@@ -533,4 +534,108 @@ TEST_CASE("--heatmap without any traversal step warns instead of writing a black
   CHECK(tess.out.empty());
   CHECK(lines(tess.err) == 1);
   CHECK_THAT(tess.err, Catch::Contains("--baseline tessellated traces plain triangles"));
+}
+
+namespace {
+
+// The options `oblong [SUB] --help` lists, each as its names ("-o", "--output").
+std::vector<std::vector<std::string>> helpOptions(const std::string& sub) {
+  const Run h = run(sub + " --help");
+  REQUIRE(h.status == 0);
+  std::vector<std::vector<std::string>> opts;
+  std::istringstream in(h.out);
+  for (std::string line; std::getline(in, line);) {
+    const size_t b = line.find_first_not_of(' ');
+    if (b == std::string::npos || b == 0 || line[b] != '-') continue;
+    std::vector<std::string> names;
+    std::string word = line.substr(b, line.find(' ', b) - b);
+    for (size_t s = 0; s != std::string::npos;) {
+      const size_t c = word.find(',', s);
+      names.push_back(word.substr(s, c == std::string::npos ? c : c - s));
+      s = c == std::string::npos ? c : c + 1;
+    }
+    if (names.back() != "--help") opts.push_back(names);
+  }
+  return opts;
+}
+
+// The option names (-x, --xyz) in `text`.
+std::vector<std::string> optionWords(const std::string& text) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const bool start = text[i] == '-' && (i == 0 || text[i - 1] == ' ' || text[i - 1] == '[');
+    if (!start) continue;
+    size_t e = i + 1;
+    while (e < text.size() && (std::isalnum((unsigned char)text[e]) || text[e] == '-')) ++e;
+    const std::string w = text.substr(i, e - i);
+    const size_t letter = w.find_first_not_of('-');
+    if (letter != std::string::npos && letter <= 2 && std::isalpha((unsigned char)w[letter])) out.push_back(w);
+    i = e;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("the README's usage block lists every option --help lists, and no other", "[cli][docs]") {
+  // The indented block under "## Using it": one entry per "./build/oblong ..." line (with
+  // its continuation lines) and the "strategy flags:" entry.
+  std::istringstream readme(oblong::test::slurp(std::string(OBLONG_SOURCE_DIR) + "/README.md"));
+  std::vector<std::string> entries;
+  bool inSection = false;
+  for (std::string line; std::getline(readme, line);) {
+    if (line.rfind("## ", 0) == 0) {
+      if (inSection) break;
+      inSection = line == "## Using it";
+      continue;
+    }
+    if (!inSection) continue;
+    if (!line.empty() && line[0] != ' ') {
+      if (!entries.empty()) break;  // the block ended
+      continue;
+    }
+    const size_t b = line.find_first_not_of(' ');
+    if (b == std::string::npos) continue;
+    const std::string text = line.substr(b);
+    if (text.rfind("./build/oblong ", 0) == 0 || text.rfind("strategy flags:", 0) == 0)
+      entries.push_back(text);
+    else if (!entries.empty())
+      entries.back() += " " + text;
+  }
+  INFO("README usage block:\n" << [&] {
+    std::string s;
+    for (const auto& e : entries) s += e + "\n";
+    return s;
+  }());
+  std::string strategyFlags;
+  for (const auto& e : entries)
+    if (e.rfind("strategy flags:", 0) == 0) strategyFlags = e;
+  REQUIRE(!strategyFlags.empty());
+  auto usage = [&](const std::string& sub) {
+    std::string s;
+    for (const auto& e : entries)
+      if (e.rfind("./build/oblong " + sub, 0) == 0) s += e.substr(e.find(sub) + sub.size()) + " ";
+    if (s.find("[strategy flags]") != std::string::npos) s += strategyFlags.substr(15);
+    return s;
+  };
+  // The top level: --version has its line, every command has its entry.
+  CHECK(usage("--version").size() > 0);
+  for (const char* sub : {"render", "trace", "info", "bake"}) {
+    INFO("oblong " << sub);
+    const std::string text = usage(sub);
+    REQUIRE(!text.empty());
+    const auto opts = helpOptions(sub);
+    CHECK(opts.size() > 1);
+    const auto words = optionWords(text);
+    for (const auto& names : opts) {
+      INFO("--help lists " << names.back());
+      CHECK(std::any_of(names.begin(), names.end(),
+                        [&](const std::string& n) { return std::find(words.begin(), words.end(), n) != words.end(); }));
+    }
+    for (const std::string& w : words) {
+      INFO("the README lists " << w);
+      CHECK(std::any_of(opts.begin(), opts.end(),
+                        [&](const auto& names) { return std::find(names.begin(), names.end(), w) != names.end(); }));
+    }
+  }
 }
