@@ -411,7 +411,7 @@ TEST_CASE("oblong --version prints the version --stats records", "[cli]") {
   CHECK_THAT(none.err, Catch::Contains("A subcommand is required"));
 }
 
-TEST_CASE("-q prints nothing but warnings and errors", "[cli]") {
+TEST_CASE("oblong render and trace -q print nothing but warnings and errors", "[cli]") {
   const auto dir = oblong::test::scratchDir("cli_quiet");
   const std::string png = (dir / "q.png").string(), stats = (dir / "q.json").string();
   const std::string csv = (dir / "rays.csv").string(), hits = (dir / "hits.csv").string();
@@ -509,7 +509,7 @@ TEST_CASE("oblong trace -o hits.bin writes the binary hits of the CSV", "[cli][t
   CHECK_THROWS_WITH(oblong::readHits(bad), Catch::Contains(bad) && Catch::Contains("hit 0"));
 }
 
-TEST_CASE("--heatmap without any traversal step warns instead of writing a black map silently", "[cli]") {
+TEST_CASE("oblong render --heatmap with no traversal step warns instead of a silently black map", "[cli]") {
   const auto dir = oblong::test::scratchDir("cli_heatmap");
   const std::string png = (dir / "img.png").string(), heat = (dir / "steps.png").string();
   const std::string plain = (dir / "plain.json").string();
