@@ -6,7 +6,9 @@
 
 #include <fmt/format.h>
 
+#include <bit>
 #include <charconv>
+#include <cstdint>
 #include <filesystem>
 #include <iterator>
 #include <cstring>
@@ -19,6 +21,10 @@ namespace {
 
 constexpr const char* kRayHeader = "ox,oy,oz,dx,dy,dz,tmin,tmax";
 constexpr const char* kHitHeader = "t,mesh,prim,u,v";
+// A binary hit (rays_io.h): t, mesh, prim, u, v, 4 bytes each.
+constexpr size_t kHitBytes = 20;
+// The .bin files are the host's floats and integers as they are in memory.
+static_assert(std::endian::native == std::endian::little, "the .bin ray and hit files are little-endian");
 
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -137,6 +143,22 @@ void writeRays(const std::string& path, const std::vector<Ray>& rays) {
 }
 
 void writeHits(const std::string& path, const std::vector<Hit>& hits) {
+  if (endsWith(path, ".bin")) {
+    // The record of rays_io.h; a miss is Hit's default (t = inf, -1, -1, 0, 0).
+    std::string out(hits.size() * kHitBytes, '\0');
+    for (size_t i = 0; i < hits.size(); ++i) {
+      const Hit h = hits[i].valid() ? hits[i] : Hit{};
+      char* o = out.data() + i * kHitBytes;
+      const int32_t mesh = h.mesh, prim = h.prim;
+      std::memcpy(o, &h.t, 4);
+      std::memcpy(o + 4, &mesh, 4);
+      std::memcpy(o + 8, &prim, 4);
+      std::memcpy(o + 12, &h.uv.x, 4);
+      std::memcpy(o + 16, &h.uv.y, 4);
+    }
+    writeTextOutput(path, out);
+    return;
+  }
   std::string text = std::string(kHitHeader) + "\n";
   for (const Hit& h : hits) {
     if (!h.valid()) {
@@ -150,11 +172,46 @@ void writeHits(const std::string& path, const std::vector<Hit>& hits) {
 }
 
 std::vector<Hit> readHits(const std::string& path) {
+  checkRegular(path);
+  std::vector<Hit> hits;
+  if (endsWith(path, ".bin")) {
+    std::ifstream f(path, std::ios::binary | std::ios::ate);
+    if (!f) fail(path, "cannot open hits file");
+    const std::streamsize size = f.tellg();
+    if (size % std::streamsize(kHitBytes) != 0)
+      fail(path, "size {} bytes is not a multiple of {} (t, mesh, prim, u, v per ray)", size, kHitBytes);
+    f.seekg(0);
+    std::string buf(size_t(size), '\0');
+    if (!f.read(buf.data(), size)) fail(path, "cannot read hits file");
+    hits.resize(buf.size() / kHitBytes);
+    for (size_t i = 0; i < hits.size(); ++i) {
+      const char* x = buf.data() + i * kHitBytes;
+      int32_t mesh, prim;
+      Hit& h = hits[i];
+      std::memcpy(&h.t, x, 4);
+      std::memcpy(&mesh, x + 4, 4);
+      std::memcpy(&prim, x + 8, 4);
+      std::memcpy(&h.uv.x, x + 12, 4);
+      std::memcpy(&h.uv.y, x + 16, 4);
+      h.mesh = mesh, h.prim = prim;
+      const bool miss = mesh == -1 && prim == -1 && h.t == kInfinity;
+      if (!miss && (mesh < 0 || prim < 0 || !std::isfinite(h.t)))
+        fail(path, "hit {}: t = {}, mesh = {}, prim = {} is neither a hit (finite t, mesh and prim >= 0) nor a "
+                   "miss (inf, -1, -1)", i, h.t, mesh, prim);
+    }
+    return hits;
+  }
   std::ifstream f(path);
-  if (!f) fail(path, "cannot open hit file");
+  if (!f) fail(path, "cannot open hits file");
   std::string line;
   if (!std::getline(f, line) || line != kHitHeader) fail(path, "line 1: expected the header '{}'", kHitHeader);
-  std::vector<Hit> hits;
+  auto index = [](const std::string& field, const std::string& where, const char* name) {
+    int v = -1;
+    const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), v);
+    if (ec != std::errc() || end != field.data() + field.size() || v < 0)
+      fail(where, "field '{}' is not an index >= 0: '{}'", name, field);
+    return v;
+  };
   for (size_t lineNo = 2; std::getline(f, line); ++lineNo) {
     const std::string where = fmt::format("{}: line {}", path, lineNo);
     const auto fields = splitCSV(line);
@@ -165,8 +222,8 @@ std::vector<Hit> readHits(const std::string& path) {
       continue;
     }
     h.t = parseFloat(fields[0], where, "t");
-    h.mesh = std::stoi(fields[1]);
-    h.prim = std::stoi(fields[2]);
+    h.mesh = index(fields[1], where, "mesh");
+    h.prim = index(fields[2], where, "prim");
     h.uv = vec2(parseFloat(fields[3], where, "u"), parseFloat(fields[4], where, "v"));
     hits.push_back(h);
   }

@@ -4,7 +4,9 @@
 //         file of 8 little-endian float32 per ray in the same order;
 //   hits: CSV with header `t,mesh,prim,u,v`; a miss is `inf,,,,`; prim is the index of
 //         the base triangle in the mesh as loaded, (u,v) the texture coordinates of
-//         the hit before tiling.
+//         the hit before tiling; or, for a `.bin` name (as the rays), 20 bytes per ray
+//         in the rays' order: t (float32), mesh, prim (int32), u, v (float32), all
+//         little-endian; a miss is t = inf, mesh = prim = -1, u = v = 0.
 #pragma once
 
 #include "core/math.h"
@@ -23,7 +25,10 @@ std::vector<Ray> readRays(const std::string& path);
 // direction, 0 <= tmin <= tmax); throws oblong::Error naming `where`.
 void checkRay(const Ray& r, const std::string& where);
 void writeRays(const std::string& path, const std::vector<Ray>& rays);  // by extension
+// CSV, or binary for a name ending in .bin (as writeRays and readRays).
 void writeHits(const std::string& path, const std::vector<Hit>& hits);
-std::vector<Hit> readHits(const std::string& path);  // t, mesh, prim, uv only
+// t, mesh, prim, uv only; throws oblong::Error naming the file (and line or hit) on a
+// malformed file.
+std::vector<Hit> readHits(const std::string& path);
 
 }  // namespace oblong

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Installs the dependencies, builds oblong and renders the built-in default scene:
-# writes out/default.png and out/default_stats.json and prints the summary.
+# Installs what a first render needs (scripts/setup.sh --minimal), builds the `oblong`
+# program alone (build/oblong) and renders the built-in default scene: writes
+# out/default.png and out/default_stats.json and prints the summary and what was built.
+# The tests, benchmarks, Vulkan path and Python module are scripts/test.sh's.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --minimal
 bash scripts/configure.sh demo build
 cmake --build build -j "$(nproc)" --target oblong
 mkdir -p out

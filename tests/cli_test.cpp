@@ -7,6 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -387,4 +390,252 @@ TEST_CASE("oblong render and info with a level of detail per ray", "[cli][lod]")
   CHECK(mean > 0.5);
   CHECK(mean < 7.0);
   CHECK(j.at("lod_per_ray").at("camera_at_0").get<double>() < 1.0);
+}
+
+TEST_CASE("oblong --version prints the version --stats records", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_version");
+  const std::string stats = (dir / "stats.json").string();
+  const Run v = run("--version");
+  INFO(v.out << v.err);
+  CHECK(v.status == 0);
+  CHECK(v.err.empty());
+  REQUIRE(run("render --size 8x6 --threads 1 -q -o " + (dir / "x.png").string() + " --stats " + stats).status == 0);
+  std::ifstream f(stats);
+  const std::string version = nlohmann::json::parse(f).at("version").get<std::string>();
+  CHECK(!version.empty());
+  CHECK(v.out == "oblong " + version + "\n");
+  // Without a command, still one error line.
+  const Run none = run("");
+  CHECK(none.status == 1);
+  CHECK(lines(none.err) == 1);
+  CHECK_THAT(none.err, Catch::Contains("A subcommand is required"));
+}
+
+TEST_CASE("oblong render and trace -q print nothing but warnings and errors", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_quiet");
+  const std::string png = (dir / "q.png").string(), stats = (dir / "q.json").string();
+  const std::string csv = (dir / "rays.csv").string(), hits = (dir / "hits.csv").string();
+  oblong::writeRays(csv, someRays(50));
+  for (const std::string& args : {"render --size 16x12 --threads 1 -o " + png + " --stats " + stats,
+                                  "trace --rays " + csv + " -o " + hits + " --stats " + stats}) {
+    std::filesystem::remove(stats);
+    const Run loud = run(args), quiet = run(args + " -q"), longForm = run(args + " --quiet");
+    INFO(args << "\n" << loud.out << loud.err << quiet.out << quiet.err);
+    REQUIRE(loud.status == 0);
+    CHECK(!loud.out.empty());
+    CHECK(quiet.status == 0);
+    CHECK(quiet.out.empty());
+    CHECK(quiet.err.empty());
+    CHECK(longForm.status == 0);
+    CHECK(longForm.out.empty());
+    CHECK(std::filesystem::exists(stats));  // files are written as without -q
+  }
+  // Errors still reach stderr under -q.
+  const Run bad = run("trace -q --rays " + (dir / "missing.csv").string() + " -o " + hits);
+  CHECK(bad.status == 1);
+  CHECK(lines(bad.err) == 1);
+  CHECK(bad.out.empty());
+}
+
+TEST_CASE("oblong trace -o hits.bin writes the binary hits of the CSV", "[cli][trace]") {
+  const auto dir = oblong::test::scratchDir("cli_trace_bin");
+  // Camera-like rays (hits) and some pointing up, away from the scene (misses).
+  auto rays = someRays(300);
+  for (int i = 0; i < 20; ++i) rays.push_back(oblong::Ray{oblong::vec3(0.1f * float(i), 2.0f, 0.0f),
+                                                          oblong::vec3(0.0f, 1.0f, 0.0f), 0.0f, oblong::kInfinity});
+  const std::string bin = (dir / "rays.bin").string(), csv = (dir / "hits.csv").string(),
+                    hitsBin = (dir / "hits.bin").string();
+  oblong::writeRays(bin, rays);
+  Run r = run("trace --rays " + bin + " -o " + csv);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  r = run("trace --rays " + bin + " -o " + hitsBin);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  CHECK_THAT(r.out, Catch::Contains("-> " + hitsBin));
+  // 20 bytes per ray, not text.
+  REQUIRE(std::filesystem::file_size(hitsBin) == 20 * rays.size());
+  const std::string bytes = oblong::test::slurp(hitsBin);
+  CHECK(bytes.rfind("t,mesh", 0) != 0);
+  const auto a = oblong::readHits(csv), b = oblong::readHits(hitsBin);
+  REQUIRE(a.size() == rays.size());
+  REQUIRE(b.size() == rays.size());
+  size_t hit = 0, miss = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    INFO("ray " << i);
+    CHECK(a[i].valid() == b[i].valid());
+    CHECK(a[i].t == b[i].t);  // %.9g round-trips a float: the same bits
+    CHECK(a[i].mesh == b[i].mesh);
+    CHECK(a[i].prim == b[i].prim);
+    CHECK(a[i].uv == b[i].uv);
+    // The record itself: t, mesh, prim, u, v; a miss is inf, -1, -1, 0, 0.
+    float t, u, v;
+    int32_t mesh, prim;
+    std::memcpy(&t, bytes.data() + 20 * i, 4);
+    std::memcpy(&mesh, bytes.data() + 20 * i + 4, 4);
+    std::memcpy(&prim, bytes.data() + 20 * i + 8, 4);
+    std::memcpy(&u, bytes.data() + 20 * i + 12, 4);
+    std::memcpy(&v, bytes.data() + 20 * i + 16, 4);
+    CHECK(t == a[i].t);
+    CHECK(mesh == a[i].mesh);
+    CHECK(prim == a[i].prim);
+    if (a[i].valid()) {
+      ++hit;
+      CHECK(u == a[i].uv.x);
+      CHECK(v == a[i].uv.y);
+    } else {
+      ++miss;
+      CHECK(t == oblong::kInfinity);
+      CHECK(mesh == -1);
+      CHECK(prim == -1);
+      CHECK(u == 0.0f);
+      CHECK(v == 0.0f);
+    }
+  }
+  CHECK(hit > 0);
+  CHECK(miss > 0);
+  // writeHits then readHits round-trips, and a malformed binary file is one error naming it.
+  const std::string again = (dir / "again.bin").string();
+  oblong::writeHits(again, b);
+  CHECK(oblong::test::slurp(again) == bytes);
+  const std::string odd = (dir / "odd.bin").string();
+  std::ofstream(odd) << bytes.substr(0, 30);
+  CHECK_THROWS_WITH(oblong::readHits(odd), Catch::Contains(odd) && Catch::Contains("multiple of 20"));
+  std::string corrupt = bytes.substr(0, 20);
+  const int32_t minusTwo = -2;
+  std::memcpy(corrupt.data() + 4, &minusTwo, 4);
+  const std::string bad = (dir / "bad.bin").string();
+  std::ofstream(bad) << corrupt;
+  CHECK_THROWS_WITH(oblong::readHits(bad), Catch::Contains(bad) && Catch::Contains("hit 0"));
+}
+
+TEST_CASE("oblong render --heatmap with no traversal step warns instead of a silently black map", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_heatmap");
+  const std::string png = (dir / "img.png").string(), heat = (dir / "steps.png").string();
+  const std::string plain = (dir / "plain.json").string();
+  std::ofstream(plain) << R"({"camera": {"from": [0, 2, 3], "to": [0, 0, 0]},
+                             "meshes": [{"shape": {"type": "plane", "size": 2}}]})";
+  const std::string common = " --size 16x12 --threads 1 --integrator primary -o " + png + " --heatmap " + heat;
+  const Run displaced = run("render" + common);
+  INFO(displaced.out << displaced.err);
+  REQUIRE(displaced.status == 0);
+  CHECK(displaced.err.empty());
+  const Run undisplaced = run("render " + plain + common);
+  INFO(undisplaced.out << undisplaced.err);
+  REQUIRE(undisplaced.status == 0);
+  CHECK(undisplaced.err == "oblong: warning: --heatmap " + heat +
+                               ": no camera ray took a traversal step (the scene has no displaced mesh; undisplaced "
+                               "meshes are plain triangles): the map is black\n");
+  CHECK(std::filesystem::exists(heat));  // written all the same, as asked
+  // Kept under -q; the tessellated baseline counts no steps either.
+  const Run tess = run("render" + common + " --baseline tessellated -q");
+  INFO(tess.out << tess.err);
+  REQUIRE(tess.status == 0);
+  CHECK(tess.out.empty());
+  CHECK(lines(tess.err) == 1);
+  CHECK_THAT(tess.err, Catch::Contains("--baseline tessellated traces plain triangles"));
+}
+
+namespace {
+
+// The options `oblong [SUB] --help` lists, each as its names ("-o", "--output").
+std::vector<std::vector<std::string>> helpOptions(const std::string& sub) {
+  const Run h = run(sub + " --help");
+  REQUIRE(h.status == 0);
+  std::vector<std::vector<std::string>> opts;
+  std::istringstream in(h.out);
+  for (std::string line; std::getline(in, line);) {
+    const size_t b = line.find_first_not_of(' ');
+    if (b == std::string::npos || b == 0 || line[b] != '-') continue;
+    std::vector<std::string> names;
+    std::string word = line.substr(b, line.find(' ', b) - b);
+    for (size_t s = 0; s != std::string::npos;) {
+      const size_t c = word.find(',', s);
+      names.push_back(word.substr(s, c == std::string::npos ? c : c - s));
+      s = c == std::string::npos ? c : c + 1;
+    }
+    if (names.back() != "--help") opts.push_back(names);
+  }
+  return opts;
+}
+
+// The option names (-x, --xyz) in `text`.
+std::vector<std::string> optionWords(const std::string& text) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const bool start = text[i] == '-' && (i == 0 || text[i - 1] == ' ' || text[i - 1] == '[');
+    if (!start) continue;
+    size_t e = i + 1;
+    while (e < text.size() && (std::isalnum((unsigned char)text[e]) || text[e] == '-')) ++e;
+    const std::string w = text.substr(i, e - i);
+    const size_t letter = w.find_first_not_of('-');
+    if (letter != std::string::npos && letter <= 2 && std::isalpha((unsigned char)w[letter])) out.push_back(w);
+    i = e;
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("the README's usage block lists every option --help lists, and no other", "[cli][docs]") {
+  // The indented block under "## Using it": one entry per "./build/oblong ..." line (with
+  // its continuation lines) and the "strategy flags:" entry.
+  std::istringstream readme(oblong::test::slurp(std::string(OBLONG_SOURCE_DIR) + "/README.md"));
+  std::vector<std::string> entries;
+  bool inSection = false;
+  for (std::string line; std::getline(readme, line);) {
+    if (line.rfind("## ", 0) == 0) {
+      if (inSection) break;
+      inSection = line == "## Using it";
+      continue;
+    }
+    if (!inSection) continue;
+    if (!line.empty() && line[0] != ' ') {
+      if (!entries.empty()) break;  // the block ended
+      continue;
+    }
+    const size_t b = line.find_first_not_of(' ');
+    if (b == std::string::npos) continue;
+    const std::string text = line.substr(b);
+    if (text.rfind("./build/oblong ", 0) == 0 || text.rfind("strategy flags:", 0) == 0)
+      entries.push_back(text);
+    else if (!entries.empty())
+      entries.back() += " " + text;
+  }
+  INFO("README usage block:\n" << [&] {
+    std::string s;
+    for (const auto& e : entries) s += e + "\n";
+    return s;
+  }());
+  std::string strategyFlags;
+  for (const auto& e : entries)
+    if (e.rfind("strategy flags:", 0) == 0) strategyFlags = e;
+  REQUIRE(!strategyFlags.empty());
+  auto usage = [&](const std::string& sub) {
+    std::string s;
+    for (const auto& e : entries)
+      if (e.rfind("./build/oblong " + sub, 0) == 0) s += e.substr(e.find(sub) + sub.size()) + " ";
+    if (s.find("[strategy flags]") != std::string::npos) s += strategyFlags.substr(15);
+    return s;
+  };
+  // The top level: --version has its line, every command has its entry.
+  CHECK(usage("--version").size() > 0);
+  for (const char* sub : {"render", "trace", "info", "bake"}) {
+    INFO("oblong " << sub);
+    const std::string text = usage(sub);
+    REQUIRE(!text.empty());
+    const auto opts = helpOptions(sub);
+    CHECK(opts.size() > 1);
+    const auto words = optionWords(text);
+    for (const auto& names : opts) {
+      INFO("--help lists " << names.back());
+      CHECK(std::any_of(names.begin(), names.end(),
+                        [&](const std::string& n) { return std::find(words.begin(), words.end(), n) != words.end(); }));
+    }
+    for (const std::string& w : words) {
+      INFO("the README lists " << w);
+      CHECK(std::any_of(opts.begin(), opts.end(),
+                        [&](const auto& names) { return std::find(names.begin(), names.end(), w) != names.end(); }));
+    }
+  }
 }

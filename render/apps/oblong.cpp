@@ -1,10 +1,12 @@
 // oblong: command-line front end.
 //   oblong render [SCENE.json] -o out.png [--size WxH] [--spp N] [--integrator primary|ao|path] [--seed S]
 //                 [--normals micro|smooth] [--threads N] [--aovs out.exr] [--heatmap steps.png]
-//                 [--stats out.json] [strategy flags]
-//   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv [--stats out.json] [strategy flags]
+//                 [--stats out.json] [-q] [strategy flags]
+//   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv|.bin [--stats out.json] [-q] [strategy flags]
 //   oblong info   [SCENE.json] [--range NAME] | --strategies [--json]
 //   oblong bake   [SCENE.json] -o SCENE.oblg [--size WxH] [--rays RAYS] [strategy flags]
+//   oblong --version
+// -q (render, trace): nothing on standard output; warnings and errors still go to stderr.
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
 // --splitter, --marching-scale, --inversion-in-traversal, --baseline, --step.
 // Without a scene file, the built-in default scene is used (no data files needed).
@@ -28,6 +30,7 @@
 #include "render/renderer.h"
 #include "render/report.h"
 #include "render/scene_info.h"
+#include "traversal/intersector.h"
 #include "traversal/strategy_catalog.h"
 #include "render/vulkan/commands.h"
 
@@ -81,7 +84,6 @@ void addStrategyFlags(CLI::App* app, StrategyFlags& f) {
   app->add_option("--lod", f.lod,
                   "level of detail: off | cone (a λ per ray from its ray cone; render only) | a number >= 0, "
                   "clamped to each map's last level (docs/lod.md; default: the scene's, off)");
-  app->add_option("--lod-bias", f.lodBias, "levels added to each ray's λ under --lod cone (default: the scene's, 0)");
   app->add_option("--range", f.range, "RangeQuery: " + strategyChoices(StrategyKind::Range));
   app->add_option("--inverter", f.inverter, "Inverter: " + strategyChoices(StrategyKind::Inverter));
   app->add_option("--splitter", f.splitter, "Splitter: " + strategyChoices(StrategyKind::Splitter));
@@ -98,6 +100,22 @@ void addStrategyFlags(CLI::App* app, StrategyFlags& f) {
 }
 
 void writeJson(const std::string& path, const nlohmann::json& j) { writeTextOutput(path, j.dump(2) + "\n"); }
+
+// A heat map in which no pixel took a traversal step is black but for its colour bar:
+// one warning line says so and why, instead of a silently black image.
+void warnEmptyHeatMap(const Scene& scene, const AccelOptions& accel, const RenderResult& res, const std::string& path) {
+  for (float st : res.aov.steps)
+    if (st > 0) return;
+  bool displaced = false;
+  for (const SceneMesh& sm : scene.meshes) displaced = displaced || sm.displacement.has_value();
+  const std::string& baseline = accel.traversal.baseline;
+  const BaselineRegistry& reg = BaselineRegistry::instance();
+  std::string why = "no camera ray reached a displaced mesh";
+  if (!displaced) why = "the scene has no displaced mesh; undisplaced meshes are plain triangles";
+  else if (!baseline.empty() && reg.has(baseline) && reg.traits(baseline).builtByScene)
+    why = "--baseline " + baseline + " traces plain triangles";
+  eprint("oblong: warning: --heatmap {}: no camera ray took a traversal step ({}): the map is black\n", path, why);
+}
 
 // render's outputs and display; its options are RenderFlags (render/program.h).
 struct RenderOutputs {
@@ -158,8 +176,13 @@ int runRender(const std::string& scenePath, const RenderFlags& rf, const RenderO
   if (!f.aovs.empty()) writeAOVs(res.aov, f.aovs);
   if (!f.heatmap.empty()) writeHeatMap(res.aov, f.heatmap);
   progress.clear();
+  if (!f.heatmap.empty()) warnEmptyHeatMap(scene, accelOpts, res, f.heatmap);
   const RenderReport report{scene, accelOpts, *backend, opts, res, f.out, f.heatmap, f.defaultOut};
-  printRenderSummary(report);
+  if (!f.quiet) printRenderSummary(report);
+  // The summary's `partial` line, as a warning, when there is no summary.
+  if (f.quiet && res.partial)
+    eprint("oblong: warning: interrupted: {} of {} pixels rendered into {} (the rest is black)\n", res.pixelsDone,
+           int64_t(opts.size.x) * opts.size.y, f.out);
   if (!f.statsPath.empty())
     writeJson(f.statsPath, renderStats(report, {OBLONG_VERSION, rf.threads, loadSeconds, progress.elapsed()}));
   return res.partial ? kInterruptedStatus : 0;
@@ -181,7 +204,7 @@ int runBake(const std::string& scenePath, const std::string& out, const std::str
 }
 
 int runTrace(const std::string& scenePath, const std::string& raysPath, const std::string& out, bool defaultOut,
-             int threads, const std::string& statsPath, const StrategyFlags& flags) {
+             int threads, const std::string& statsPath, bool quiet, const StrategyFlags& flags) {
   if (threads < 0) fail("--threads", "must be >= 0, got {}", threads);
   checkOutputPath(out, "hits");
   if (!statsPath.empty()) checkOutputPath(statsPath, "statistics");
@@ -206,7 +229,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   }
   writeHits(out, res.hits);
   const TraceReport report{scene, accelOpts, *backend, res, raysPath, out, defaultOut};
-  printTraceSummary(report);
+  if (!quiet) printTraceSummary(report);
   if (!statsPath.empty())
     writeJson(statsPath,
               traceStats(report, {OBLONG_VERSION, threads, loadSeconds,
@@ -249,6 +272,8 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
 int main(int argc, char** argv) {
   CLI::App app{"oblong: ray tracing displaced triangle meshes without tessellation"};
   app.require_subcommand(1);
+  // `git describe` of the source tree, as --stats records it.
+  app.set_version_flag("--version", std::string("oblong ") + OBLONG_VERSION, "print the version and exit");
   // --help shows every option's default (subcommands copy these option defaults).
   app.option_defaults()->always_capture_default();
   std::string scenePath, statsPath, range, raysPath, hitsPath = "hits.csv", lodFlag;
@@ -270,12 +295,16 @@ int main(int argc, char** argv) {
   render->add_option("--seed", rf.seed, "random seed in [0, 2^64) (same seed, same image, any thread count)");
   render->add_option("--aovs", ro.aovs, "multi-channel EXR: colour, depth, normal, per-pixel counters");
   render->add_option("--heatmap", ro.heatmap, "false-colour log-scale heat map of traversal steps (PNG)");
-  render->add_flag("-q,--quiet", ro.quiet, "no progress display (same as --progress never)");
+  render->add_flag("-q,--quiet", ro.quiet,
+                   "print nothing but warnings and errors (stderr): no summary, no progress display");
   render->add_option("--progress", ro.progress,
                      "phases, elapsed time and ETA on stderr: auto (on a terminal) | always (also plain lines to a "
                      "file or pipe) | never");
   render->add_option("--stats", ro.statsPath, "write configuration, timings, counters and memory as JSON");
   addStrategyFlags(render, flags);
+  // Only render traces a λ per ray (--lod cone), so only render has its bias.
+  render->add_option("--lod-bias", flags.lodBias,
+                     "levels added to each ray's λ under --lod cone (default: the scene's, 0)");
   render->add_option("--device", deviceFlag, "cpu (Embree) | vulkan (ray tracing pipeline, docs/vulkan.md)")
       ->check(CLI::IsMember({"cpu", "vulkan"}));
 
@@ -284,9 +313,12 @@ int main(int argc, char** argv) {
   trace->add_option("--rays", raysPath, "rays: CSV (ox,oy,oz,dx,dy,dz,tmin,tmax) or .bin (8 float32 per ray)")
       ->required();
   auto* traceOut = trace->add_option("-o,--output", hitsPath,
-                                     "hits: CSV (t,mesh,prim,u,v; t in units of |d|, u,v texture coordinates)");
+                                     "hits: CSV (t,mesh,prim,u,v; t in units of |d|, u,v texture coordinates) or "
+                                     ".bin (t float32, mesh, prim int32, u, v float32 per ray)");
   trace->add_option("--threads", threads, "worker threads (0: all cores)");
   trace->add_option("--stats", statsPath, "write configuration, timings, counters and memory as JSON");
+  bool traceQuiet = false;
+  trace->add_flag("-q,--quiet", traceQuiet, "print nothing but warnings and errors (stderr): no summary");
   addStrategyFlags(trace, flags);
   trace->add_option("--device", deviceFlag, "cpu (Embree) | vulkan (ray tracing pipeline, docs/vulkan.md)")
       ->check(CLI::IsMember({"cpu", "vulkan"}));
@@ -319,7 +351,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     // One line and exit status 1, as for any other bad input.
     std::string what = e.what();
     for (char& c : what)
@@ -343,7 +375,8 @@ int main(int argc, char** argv) {
     if (*render || *trace) catchInterrupt();
     ro.defaultOut = renderOut->count() == 0;
     if (*render) status = runRender(scenePath, rf, ro, flags);
-    else if (*trace) status = runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, flags);
+    else if (*trace)
+      status = runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, traceQuiet, flags);
     else if (*bake) status = runBake(scenePath, bakeOut, bakeSize, raysPath, flags);
     else if (*info && listStrategies) status = runStrategies(infoJson);
     else if (*info && infoJson) fail("--json", "only applies to --strategies");
