@@ -123,6 +123,7 @@ void writeDisplaced(Writer& w, const SceneMesh& sm, const ExportPlan::Part& part
       size_t n = 0;
       float rec[15];
       forEachMicroTriangle(mesh.triangle(a), d, [&](const MicroTriangle& m) {
+        if ((n & (kChunkTriangles - 1)) == 0) checkInterrupt(interrupt);
         putMicro(rec, mesh, m);
         w.put(rec, sizeof rec);
         ++n;
