@@ -292,6 +292,13 @@ TessellationEstimate estimateTessellation(const Mesh& mesh, const Displacement& 
   return summarize(patchSizes(mesh, d));
 }
 
+std::vector<size_t> microTriangleCounts(const Mesh& mesh, const Displacement& d) {
+  const std::vector<PatchSize> sizes = patchSizes(mesh, d);
+  std::vector<size_t> out(sizes.size());
+  for (size_t i = 0; i < sizes.size(); ++i) out[i] = sizes[i].triangles;
+  return out;
+}
+
 size_t tessellationPeakBytes(const std::vector<TessellationEstimate>& meshes, size_t threads) {
   // Meshes are tessellated one after the other (patches with the vertex maps of the
   // triangles in flight, then concatenated into buffers of the exact size), and
@@ -440,7 +447,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
     g->mesh = int(mi);
     baseTriangles_ += mesh.triangles.size();
     if (!sm.displacement) {
-      for (size_t v = 0; v < mesh.positions.size(); ++v) g->vertices.emplace_back(vec3(mesh.world(v)), 0.0f);
+      for (const vec3& p : mesh.positions) g->vertices.emplace_back(worldFloat(mesh, p), 0.0f);
       g->indices = mesh.triangles;
       g->uvs = mesh.hasUVs() ? mesh.uvs : std::vector<vec2>(mesh.positions.size(), vec2(0.0f));
     } else if (!tessellate_) {
@@ -479,7 +486,7 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
         const uint32_t base = uint32_t(g->vertices.size());
         Patch& p = patches[ti];
         // Built in the mesh's frame, traced by Embree in the world (rounded once).
-        for (const vec4& v : p.vertices) g->vertices.emplace_back(vec3(dvec3(vec3(v)) + mesh.origin), 0.0f);
+        for (const vec4& v : p.vertices) g->vertices.emplace_back(worldFloat(mesh, vec3(v)), 0.0f);
         g->uvs.insert(g->uvs.end(), p.uvs.begin(), p.uvs.end());
         for (const auto& t : p.indices) g->indices.push_back(t + base);
         g->basePrim.insert(g->basePrim.end(), p.indices.size(), uint32_t(ti));

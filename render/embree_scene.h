@@ -63,6 +63,12 @@ struct TessellationEstimate {
   size_t patchBytes() const { return vertices * (sizeof(vec4) + sizeof(vec2)) + microTriangles * sizeof(glm::uvec3); }
 };
 TessellationEstimate estimateTessellation(const Mesh& mesh, const Displacement& d);
+// The micro-triangles the pre-tessellation baseline builds for each triangle of the mesh
+// (forEachMicroTriangle's, counted without building them; 0 for a skipped triangle).
+std::vector<size_t> microTriangleCounts(const Mesh& mesh, const Displacement& d);
+// A point of a mesh's frame where Embree traces it: origin + p summed in double, rounded
+// once to float (plain meshes' vertices and the pre-tessellated micro-triangles alike).
+inline vec3 worldFloat(const Mesh& mesh, const vec3& p) { return vec3(mesh.origin + dvec3(p)); }
 // Bytes held at the peak of building these meshes' tessellations and their BVH
 // (patches with their vertex tables, the concatenated buffers, Embree's build).
 size_t tessellationPeakBytes(const std::vector<TessellationEstimate>& meshes, size_t threads);

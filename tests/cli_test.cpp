@@ -9,9 +9,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
-#include <cstring>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <sys/wait.h>
 
@@ -620,7 +621,7 @@ TEST_CASE("the README's usage block lists every option --help lists, and no othe
   };
   // The top level: --version has its line, every command has its entry.
   CHECK(usage("--version").size() > 0);
-  for (const char* sub : {"render", "trace", "info", "bake"}) {
+  for (const char* sub : {"render", "trace", "info", "bake", "export"}) {
     INFO("oblong " << sub);
     const std::string text = usage(sub);
     REQUIRE(!text.empty());
@@ -638,4 +639,83 @@ TEST_CASE("the README's usage block lists every option --help lists, and no othe
                         [&](const auto& names) { return std::find(names.begin(), names.end(), w) != names.end(); }));
     }
   }
+}
+
+TEST_CASE("oblong export writes a PLY and refuses what it cannot write with one line", "[cli][export]") {
+  const auto dir = oblong::test::scratchDir("cli_export");
+  std::vector<float> v(16 * 16);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = float(i % 5) / 4.0f;
+  oblong::test::writeGray((dir / "map.png").string(), 16, 16, v, OIIO::TypeDesc::UINT8);
+  const std::string scene = (dir / "scene.json").string(), big = (dir / "big.json").string();
+  std::ofstream(scene) << R"({"meshes": [{"shape": {"type": "plane", "size": 2},
+                             "displacement": {"map": "map.png", "scale": 0.1}},
+                            {"shape": {"type": "plane", "size": 4}, "transform": {"translate": [0, -1, 0]}}]})";
+  std::ofstream(big) << R"({"meshes": [{"shape": {"type": "plane"},
+                           "displacement": {"map": "map.png", "scale": 0.1, "tiling": 4096}}]})";
+  const std::string ply = (dir / "out.ply").string();
+  auto has = [](const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; };
+  auto oneLine = [](const Run& r, const std::vector<std::string>& words) {
+    INFO(r.out << r.err);
+    CHECK(r.status == 1);
+    CHECK(lines(r.err) == 1);
+    CHECK(r.err.rfind("oblong: ", 0) == 0);
+    for (const std::string& w : words) CHECK(r.err.find(w) != std::string::npos);
+  };
+  // The micro-triangles the summary line reports.
+  auto microTriangles = [](const std::string& out) {
+    std::smatch m;
+    REQUIRE(std::regex_search(out, m, std::regex(R"(: (\d+) micro-triangles of 1 displaced mesh)")));
+    return std::stoul(m[1]);
+  };
+
+  const Run r = run("export " + scene + " -o " + ply);
+  INFO(r.out << r.err);
+  REQUIRE(r.status == 0);
+  CHECK(has(r.out, "oblong export: " + scene + " -> " + ply + ": "));
+  CHECK(has(r.out, " micro-triangles of 1 displaced mesh, 2 triangles of 1 plain mesh, "));
+  const size_t n = microTriangles(r.out) + 2;
+  CHECK(n > 2 * 15 * 15);  // at least the 15x15 cells between the 16x16 samples, two each
+  // The header, three float x y z u v vertices and one face per triangle, nothing else.
+  const std::string text = oblong::test::slurp(ply);
+  const size_t body = text.find("end_header\n");
+  REQUIRE(body != std::string::npos);
+  CHECK(text.size() == body + 11 + n * (3 * 20 + 13));
+  CHECK(has(text, "format binary_little_endian 1.0\n"));
+  CHECK(has(text, fmt::format("element vertex {}\n", 3 * n)));
+  CHECK(has(text, fmt::format("element face {}\n", n)));
+  CHECK(has(r.out, fmt::format("{} vertices", 3 * n)));
+  // Level 1 of a 16x16 map has 8x8 samples: about a quarter of the micro-triangles.
+  const Run lod = run("export " + scene + " --lod 1 -o " + ply);
+  INFO(lod.out << lod.err);
+  REQUIRE(lod.status == 0);
+  CHECK(has(lod.out, " micro-triangles of 1 displaced mesh at level of detail 1, 2 triangles"));
+  CHECK(microTriangles(lod.out) < (n - 2) / 3);
+
+  oneLine(run("export " + scene), {"--output is required"});
+  oneLine(run("export " + scene + " -o " + (dir / "out.obj").string()), {"out.obj", "use a .ply name"});
+  oneLine(run("export " + scene + " --lod cone -o " + ply), {"--lod", "an export holds one surface"});
+  oneLine(run("export " + scene + " -o " + scene), {"scene.json", "use a .ply name"});
+  // A scene without displaced meshes; its export, loaded as a mesh, is an input of a
+  // scene that uses it.
+  const std::string plain = (dir / "plain.json").string(), reuse = (dir / "reuse.json").string(),
+                    plainPly = (dir / "plain.ply").string();
+  std::ofstream(plain) << R"({"meshes": [{"shape": {"type": "plane", "segments": 2}}]})";
+  const Run p = run("export " + plain + " -o " + plainPly);
+  INFO(p.out << p.err);
+  CHECK(p.status == 0);
+  CHECK(has(p.out, ": 0 micro-triangles of 0 displaced meshes, 8 triangles of 1 plain mesh, 24 vertices, "));
+  std::ofstream(reuse) << R"({"meshes": [{"file": "plain.ply"}]})";
+  oneLine(run("export " + reuse + " -o " + plainPly), {"names an input of this command (mesh"});
+  oneLine(run("export " + scene + " -o " + (dir / "nosuch" / "x.ply").string()), {"does not exist"});
+  // Refused before anything is written: an earlier file stays as it was.
+  std::ofstream(ply) << "earlier";
+  oneLine(run("export " + big + " -o " + ply), {big + ": the export needs ", "uint32 indices", "try --lod "});
+  CHECK(oblong::test::slurp(ply) == "earlier");
+  // A device is written through from a copy: a failed write is one line, and the copy
+  // is checked against the memory like every structure.
+  oneLine(run("export " + scene + " -o /dev/full"), {"/dev/full", "write failed"});
+  ::setenv("OBLONG_MEMORY_LIMIT", "1K", 1);
+  const Run mem = run("export " + scene + " -o /dev/null");
+  ::unsetenv("OBLONG_MEMORY_LIMIT");
+  oneLine(mem, {scene + ": writing the export through to /dev/null needs ", "OBLONG_MEMORY_LIMIT"});
 }

@@ -5,6 +5,7 @@
 //   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv|.bin [--stats out.json] [-q] [strategy flags]
 //   oblong info   [SCENE.json] [--range NAME] | --strategies [--json]
 //   oblong bake   [SCENE.json] -o SCENE.oblg [--size WxH] [--rays RAYS] [strategy flags]
+//   oblong export [SCENE.json] -o MESH.ply [--lod off|λ]
 //   oblong --version
 // -q (render, trace): nothing on standard output; warnings and errors still go to stderr.
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
@@ -23,6 +24,7 @@
 #include "core/stats.h"
 #include "render/embree_scene.h"
 #include "render/image.h"
+#include "render/mesh_export.h"
 #include "render/output.h"
 #include "render/program.h"
 #include "render/progress.h"
@@ -237,6 +239,49 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   return 0;
 }
 
+// `oblong export`: the surface the pre-tessellation baseline traces, as one PLY file
+// (render/mesh_export.h), refused before anything is written when it would not fit.
+int runExport(const std::string& scenePath, const std::string& out, const std::string& lod) {
+  checkOutputPath(out, "export");
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& c : ext) c = char(std::tolower((unsigned char)c));
+  // A device (/dev/stdout) takes the bytes whatever its name.
+  std::error_code ec;
+  const auto st = std::filesystem::status(out, ec);
+  if (ext != ".ply" && (!std::filesystem::exists(st) || std::filesystem::is_regular_file(st)))
+    fail(out, "the export is a binary PLY file: use a .ply name");
+  checkNotInputs({{"-o", out}}, {{"scene", scenePath}});
+  const auto start = std::chrono::steady_clock::now();
+  Scene scene = sceneFrom(scenePath);
+  checkNotInputs({{"-o", out}}, sceneInputs(scenePath, scene));
+  StrategyFlags flags;
+  flags.lod = lod;
+  flags.applyLod(scene, "an export holds one surface");
+  const ExportPlan plan = planExport(scene);
+  checkExportFits(scene, plan, out);
+  if (!writeExport(scene, plan, out, &gInterrupted)) {
+    eprint("oblong: interrupted: nothing written\n");
+    return kInterruptedStatus;
+  }
+  // The levels the meshes are at (each map's own, clamped to its last level).
+  std::string levels;
+  if (scene.lod) {
+    std::vector<float> l;
+    for (const SceneMesh& sm : scene.meshes)
+      if (sm.displacement && std::find(l.begin(), l.end(), sm.displacement->lod) == l.end())
+        l.push_back(sm.displacement->lod);
+    for (const float x : l) levels += fmt::format("{}{:g}", levels.empty() ? " at level of detail " : ", ", x);
+  }
+  fmt::print("oblong export: {} -> {}: {} micro-triangles of {} displaced mesh{}{}, {} triangles of {} plain "
+             "mesh{}, {} vertices, {}, {:.3f} s\n",
+             scene.path, out, plan.microTriangles, plan.displacedMeshes, plan.displacedMeshes == 1 ? "" : "es",
+             levels, plan.plainTriangles,
+             plan.plainMeshes, plan.plainMeshes == 1 ? "" : "es", plan.vertices(),
+             humanBytes(exportHeader(scene, plan).size() + plan.bodyBytes()),
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return 0;
+}
+
 // `oblong info --strategies`: every registered strategy (what the experiments read).
 int runStrategies(bool json) {
   const nlohmann::json j = strategiesJson();
@@ -331,6 +376,15 @@ int main(int argc, char** argv) {
   bake->add_option("--rays", raysPath, "also store this ray file (CSV or .bin, as for trace)");
   addStrategyFlags(bake, flags);
 
+  auto* exportCmd = app.add_subcommand(
+      "export", "write the displaced micro-geometry and the plain meshes as one PLY file (world coordinates)");
+  std::string exportOut;
+  exportCmd->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  exportCmd->add_option("-o,--output", exportOut,
+                        "binary little-endian PLY: float x y z u v per vertex, 3 vertices per triangle")
+      ->required();
+  exportCmd->add_option("--lod", lodFlag, "level of detail: off | a number >= 0 (default: the scene's)");
+
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
   info->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
   info->add_option("--range", range, "range-query strategy (default: the scene's)");
@@ -344,7 +398,7 @@ int main(int argc, char** argv) {
   for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
     known = known || (argc > 1 && sub->get_name() == argv[1]);
   if (argc > 1 && argv[1][0] != '-' && !known) {
-    eprint("oblong: command line: unknown command '{}' (render, trace, info or bake; oblong --help lists them)\n",
+    eprint("oblong: command line: unknown command '{}' (render, trace, info, bake or export; oblong --help lists them)\n",
            argv[1]);
     return 1;
   }
@@ -371,13 +425,14 @@ int main(int argc, char** argv) {
             if (v.empty())
               fail(o->get_name(), "{}",
                    o->get_name() == "scene" ? "empty file name (omit it for the built-in scene)" : "empty value");
-    // Ctrl-C keeps what was rendered (render) or writes nothing (trace), on both devices.
-    if (*render || *trace) catchInterrupt();
+    // Ctrl-C keeps what was rendered (render) or writes nothing (trace, export).
+    if (*render || *trace || *exportCmd) catchInterrupt();
     ro.defaultOut = renderOut->count() == 0;
     if (*render) status = runRender(scenePath, rf, ro, flags);
     else if (*trace)
       status = runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, traceQuiet, flags);
     else if (*bake) status = runBake(scenePath, bakeOut, bakeSize, raysPath, flags);
+    else if (*exportCmd) status = runExport(scenePath, exportOut, lodFlag);
     else if (*info && listStrategies) status = runStrategies(infoJson);
     else if (*info && infoJson) fail("--json", "only applies to --strategies");
     else if (*info) status = runInfo(scenePath, range, lodFlag);
