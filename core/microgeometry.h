@@ -1,18 +1,16 @@
 // The intersectable micro-geometry (docs/design.md §1): the texel-centre grid, each cell split
 // by the diagonal (i,j)-(i+1,j+1), each cell triangle clipped in uv against the base
-// triangle T, every vertex mapped by Eq. 1 with T's own P and N, polygons fanned.
+// triangle T, every vertex mapped by Eq. 1 with T's own P and N, polygons fanned. The
+// construction and its watertightness are core/kernels/microcells.h, which the Vulkan
+// shaders compile too.
 //
-// Watertightness: every vertex lying on an edge of T (edge/grid-line crossings, grid
-// points exactly on the edge, T's vertices) is computed from that edge alone, with
-// its endpoints in a canonical order (lexicographic in uv), so the two triangles
-// sharing an edge produce bit-identical points along it.
-//
-// MicroCells is the one implementation: forEachMicroTriangle loops over cells with it,
+// MicroCells is the one implementation on the CPU: forEachMicroTriangle loops over cells with it,
 // and the traversal (traversal/traversal.h) calls it cell by cell. It allocates nothing,
 // so it can run in a per-ray hot loop, and both paths get bit-identical triangles.
 #pragma once
 
 #include "core/heightmap.h"
+#include "core/kernels/microcells.h"
 #include "core/math.h"
 #include "core/triangle.h"
 
@@ -23,10 +21,8 @@
 
 namespace oblong {
 
-struct MicroVertex {
-  vec3 p;   // world position
-  vec2 uv;  // texture coordinates (before tiling)
-};
+// A micro-vertex: position and texture coordinates (before tiling).
+using MicroVertex = shared::McVertex;
 
 struct MicroTriangle {
   MicroVertex v[3];
@@ -38,35 +34,6 @@ struct CellRange {
   int x0, y0, x1, y1;
 };
 CellRange cellsOverlapping(const DisplacedTriangle& T, const Displacement& d);
-
-namespace micro {
-// Lines of the construction: grid verticals x = c, horizontals y = c, diagonals
-// x - y = c (sample coordinates), and T's edges.
-enum class LineType : uint8_t { V, H, D, Edge };
-struct Line {
-  LineType type;
-  int c;
-};
-// Polygon vertex: where it came from decides how its world position is computed.
-enum class Kind : uint8_t { Grid, TVertex, Cross };
-struct PV {
-  dvec2 s;    // sample coordinates (for the side tests)
-  Kind kind;
-  int a, b;   // Grid: (i, j); TVertex: (k, -); Cross: (edge, -)
-  Line line;  // Cross: the grid line crossed
-  Line next;  // line carrying the polygon edge to the next vertex
-  bool same(const PV& o) const {
-    if (kind != o.kind) return false;
-    if (kind == Kind::Cross) return a == o.a && line.type == o.line.type && line.c == o.line.c;
-    return a == o.a && (kind == Kind::TVertex || b == o.b);
-  }
-};
-struct EdgeInfo {
-  int A, B;      // canonical endpoint order (vertex indices of T)
-  dvec2 SA, SB;  // their sample coordinates
-  double sigma;  // sign of orient(SA, SB, opposite vertex): the inside side
-};
-}  // namespace micro
 
 // Grid points already computed by MicroCells::cell for one triangle (direct-mapped,
 // keyed by the sample index): neighbouring cells share corners, a march along a ray
@@ -115,27 +82,16 @@ class MicroCells {
   }
 
  private:
-  bool inside(int e, const dvec2& p) const;
-  bool strictlyInside(const dvec2& p) const;
-  double crossParamRaw(int e, const micro::Line& L) const;
-  double crossParam(int e, const micro::Line& L) const;
-  MicroVertex onEdge(int e, double t, float rawHeight) const;
-  float lineHeight(const micro::Line& L, const dvec2& s) const;
-  MicroVertex world(const micro::PV& v, const bool* onEdgePossible, GridVertexCache* cache) const;
   MicroVertex gridInterior(int i, int j) const;
   const MicroVertex& gridInterior(int i, int j, GridVertexCache& cache) const;
   int clipped(int i, int j, MicroTriangle* out, GridVertexCache* cache) const;
-  int clip(int e, const micro::PV* in, int n, micro::PV* out) const;
+  friend struct MicroHeights;
 
   const DisplacedTriangle& T_;
   const Displacement& d_;
   float f_;
-  dvec2 S_[3];
-  micro::EdgeInfo E_[3];  // edge e joins vertices e and (e+1)%3
-  // Per edge, the corner of a cell (offset 0 or 1 on each axis) where σ·orient, as
-  // computed, is least: every rounding step of orient is monotone in each coordinate
-  // of the point, so it is the same corner for every cell (interior, clipped).
-  ivec2 least_[3];
+  shared::McEdges E_;  // T in sample coordinates: the edges' canonical order and sides
+  shared::McTri Tm_;   // T's float data and the height transform, as the kernel reads them
 };
 
 // Calls emit for every micro-triangle of T over the cells in `cells` (all of T's cells

@@ -75,8 +75,8 @@ struct CountersGpu {
   int pad;
 };
 
-// One displaced base triangle: DisplacedTriangle, its PrismParams, LocalFrame and the
-// MicroCells constants (traversal/traversal_mesh.h, psi.h, core/microgeometry.h),
+// One displaced base triangle: DisplacedTriangle, its PrismParams, LocalFrame and what
+// MicroCells reads (traversal/traversal_mesh.h, psi.h, core/kernels/microcells.h),
 // precomputed on the host by the very code the CPU runs.
 struct TriGpu {
   // LocalFrame: P = Pc + PX X + PY Y, N = Nc + NX X + NY Y over local sample coordinates.
@@ -91,7 +91,7 @@ struct TriGpu {
   dvec2 bc, bX, bY;         // barycentrics (u, v) = bc + bX X + bY Y
   dvec2 sc, sU, sV;         // local sample coordinates (X, Y) = sc + sU u + sV v
   dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates
-  dvec2 S[3];               // MicroCells::S_: vertices in (absolute) sample coordinates
+  dvec2 S[3];               // vertices in (absolute) sample coordinates (mcEdges' S)
   dvec2 kb, kxy, eps;       // PrismParams: residual bounds and the cell dilation ε
   double vertexErr, a, b, budget, budgetPad, maxP, minNormalLength;  // budgetPad: TraversalMesh::budgetPad
   double inflateB, inflateS, ks, domainB, domainS0, domainS1;
@@ -104,11 +104,9 @@ struct TriGpu {
   vec3 p[3], n[3];          // DisplacedTriangle (float, as MicroCells reads it)
   vec2 t[3];
   vec4 uvToBary;            // glm::mat2 columns: m[0][0], m[0][1], m[1][0], m[1][1]
-  vec4 edgeSigma;           // MicroCells::E_[e].sigma (±1), w unused
   float uvArea2, pad0;
   ivec2 origin;             // LocalFrame::origin
   ivec2 cellLo, cellHi;     // T's cells, local (cellsOverlapping − origin)
-  ivec4 edgeA, edgeB;       // MicroCells::E_[e].A / .B (canonical endpoint order)
   int valid, wellPosed;
   int obbValid, pad1;       // PrismOBB::valid()
 };

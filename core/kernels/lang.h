@@ -15,8 +15,8 @@
 //   OBLONG_FORCE_INLINE on hot C++ paths (GLSL inlines every call anyway)
 //   OBLONG_PRECISE  on every declaration whose arithmetic must not be fused or
 //                   reordered (GLSL precise; the CPU's strict IEEE double needs nothing)
-//   OBLONG_TEMPLATE2(A, B) before a function over two types that each language supplies:
-//                   C++ template parameters, GLSL macros the including shader defines
+//   OBLONG_TEMPLATE1(A), OBLONG_TEMPLATE2(A, B) before a function over types that each
+//                   language supplies: C++ template parameters, GLSL macros the including shader defines
 //                   (with the functions the kernel calls on them)
 // min, max and abs are GLSL's on both sides (for scalars: y < x ? y : x, as std::min);
 // dotD, crossD, dotF, crossF (and lengthD, lengthF) are glm's formulas, which GLSL's
@@ -97,6 +97,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_IN_ARRAY const
 #define OBLONG_OUT_ARRAY
 #define OBLONG_PRECISE
+#define OBLONG_TEMPLATE1(A) template <typename A>
 #define OBLONG_TEMPLATE2(A, B) template <typename A, typename B>
 
 #else  // GLSL
@@ -111,6 +112,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 #define OBLONG_IN_ARRAY in
 #define OBLONG_OUT_ARRAY out
 #define OBLONG_PRECISE precise
+#define OBLONG_TEMPLATE1(A)
 #define OBLONG_TEMPLATE2(A, B)
 
 #define kInfD double(uintBitsToFloat(0x7f800000u))

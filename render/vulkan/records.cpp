@@ -20,16 +20,10 @@ namespace oblong::vk {
 using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
-static_assert(sizeof(TriGpu) == 1472 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
+static_assert(sizeof(TriGpu) == 1424 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
 static_assert(sizeof(MeshGpu) == 160 && sizeof(PushGpu) == 16);
 
 namespace {
-
-// MicroCells' edge order (core/microgeometry.cpp: uvLess, orient).
-bool uvLess(const vec2& a, const vec2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
-double orient(const dvec2& a, const dvec2& b, const dvec2& p) {
-  return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-}
 
 // The GPU record of one displaced triangle from the CPU's TraversalMesh.
 TriGpu makeTri(const TraversalMesh& tm, size_t i) {
@@ -56,8 +50,7 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   g.bc = F.bc, g.bX = F.bX, g.bY = F.bY, g.sc = F.sc, g.sU = F.sU, g.sV = F.sV;
   g.sbLo = d.toSample(T.uvBox.lo) - dvec2(F.origin);
   g.sbHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
-  dvec2 S[3];
-  for (int k = 0; k < 3; ++k) S[k] = g.S[k] = d.toSample(T.t[k]);
+  for (int k = 0; k < 3; ++k) g.S[k] = d.toSample(T.t[k]);
   g.kb = P.kb, g.kxy = P.kxy, g.eps = P.eps;
   g.vertexErr = P.vertexErr, g.a = P.a, g.b = P.b, g.budget = tm.originBudget[i];
   g.maxP = maxAbsVertex(T), g.minNormalLength = T.minNormalLength;
@@ -71,13 +64,6 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   for (int k = 0; k < 3; ++k) g.p[k] = T.p[k], g.n[k] = T.n[k], g.t[k] = T.t[k];
   const glm::mat2& M = T.uvToBary;
   g.uvToBary = vec4(M[0][0], M[0][1], M[1][0], M[1][1]);
-  for (int e = 0; e < 3; ++e) {  // MicroCells::MicroCells
-    int A = e, B = (e + 1) % 3;
-    if (uvLess(T.t[B], T.t[A])) std::swap(A, B);
-    const int opp = 3 - A - B;
-    g.edgeA[e] = A, g.edgeB[e] = B;
-    g.edgeSigma[e] = orient(S[A], S[B], S[opp]) > 0 ? 1.0f : -1.0f;
-  }
   g.uvArea2 = T.uvArea2;
   g.origin = F.origin;
   const CellRange& cr = tm.cells[i];

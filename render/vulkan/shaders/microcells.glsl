@@ -1,14 +1,12 @@
-// The micro-geometry cell by cell (docs/design.md §1): a line-for-line GLSL port of
-// core/microgeometry.cpp's MicroCells::cell (interior cells, Sutherland-Hodgman clipping
-// against T's edges with the line bookkeeping, canonical edge evaluation; the CPU skips
-// the clips against edges whose half-plane holds the whole cell and reuses cached grid
-// points, which yields the same triangles bit for bit — the parity tests compare them
-// with this port, which clips against all three); the watertight ray/micro-triangle test
-// is the CPU's own (core/kernels/microtri.h). Every float and double
-// operation is `precise` (SPIR-V NoContraction): no fused multiply-add, so the
-// micro-vertices, edge functions and t come out as the CPU computes them, which both
-// watertightness and CPU/GPU parity rely on. Needs the globals of traversal.glsl:
-// g_tri, g_mesh, the ray (g_wr) and the closest hit (g_hit*).
+// The micro-geometry cell by cell (docs/design.md §1): the construction and the vertices
+// are the CPU's own code (core/kernels/microcells.h), as is the watertight
+// ray/micro-triangle test (core/kernels/microtri.h); here are their heights (the map,
+// its level of detail per ray, Displacement's sample conversions, ported line for line)
+// and the cell's loop. Every float and double operation is `precise` (SPIR-V
+// NoContraction): no fused multiply-add, so the micro-vertices, edge functions and t come
+// out as the CPU computes them, which both watertightness and CPU/GPU parity rely on.
+// Needs the globals of prism.rint and traversal.glsl: g_tri, g_mesh, the ray (g_wr) and
+// the closest hit (g_hit*).
 
 #include "core/kernels/lang.h"
 #include "core/kernels/microtri.h"
@@ -79,268 +77,54 @@ float microAtSample(dvec2 s) {
   return r;
 }
 
-// ---- float helpers as glm computes them (lengthF, crossF: core/kernels/lang.h) ------
-vec3 normalizeF(vec3 v) {  // glm::normalize: v * (1 / sqrt(dot(v, v)))
-  precise float d = v.x * v.x + v.y * v.y + v.z * v.z;
-  precise float inv = 1.0 / sqrt(d);
-  precise vec3 r = v * inv;
-  return r;
-}
-vec3 triP(float u, float v) {  // DisplacedTriangle::P
-  precise float w = 1.0 - u - v;
-  precise vec3 r = w * TRI.p[0] + u * TRI.p[1] + v * TRI.p[2];
-  return r;
-}
-vec3 triN(float u, float v) {
-  precise float w = 1.0 - u - v;
-  precise vec3 r = w * TRI.n[0] + u * TRI.n[1] + v * TRI.n[2];
-  return r;
-}
-vec2 baryOfUV(vec2 uv) {  // uvToBary * (uv - t0), glm::mat2 * vec2
-  precise vec2 q = uv - TRI.t[0];
-  precise vec4 m = TRI.uvToBary;
-  precise vec2 r = vec2(m.x * q.x + m.z * q.y, m.y * q.x + m.w * q.y);
-  return r;
-}
+// ---- MicroCells: the CPU's own code (core/kernels/microcells.h) ----------------------
+#define McHeights int  // the heights are the globals above (mapAt)
+#include "core/kernels/microcells.h"
 
-// ---- MicroCells ----------------------------------------------------------------------
-#define KIND_GRID 0
-#define KIND_TVERTEX 1
-#define KIND_CROSS 2
-#define LINE_V 0
-#define LINE_H 1
-#define LINE_D 2
-#define LINE_EDGE 3
-
-struct PV {
-  dvec2 s;
-  int kind;
-  int a, b;
-  int lineType, lineC;  // Cross: the grid line crossed
-  int nextType, nextC;  // line carrying the polygon edge to the next vertex
-};
-
-struct MicroVertex {
-  vec3 p;
-  vec2 uv;
-};
-
-bool pvSame(PV v, PV o) {
-  if (v.kind != o.kind) return false;
-  if (v.kind == KIND_CROSS) return v.a == o.a && v.lineType == o.lineType && v.lineC == o.lineC;
-  return v.a == o.a && (v.kind == KIND_TVERTEX || v.b == o.b);
-}
-
-double orient2(dvec2 a, dvec2 b, dvec2 p) {
-  precise double r = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
-  return r;
-}
-dvec2 edgeSA(int e) { return TRI.S[TRI.edgeA[e]]; }
-dvec2 edgeSB(int e) { return TRI.S[TRI.edgeB[e]]; }
-bool insideEdge(int e, dvec2 p) {
-  precise double o = double(TRI.edgeSigma[e]) * orient2(edgeSA(e), edgeSB(e), p);
-  return o >= 0.0;
-}
-bool strictlyInside(dvec2 p) {
-  for (int e = 0; e < 3; ++e) {
-    precise double o = double(TRI.edgeSigma[e]) * orient2(edgeSA(e), edgeSB(e), p);
-    if (!(o > 0.0)) return false;
+// MicroCells' constructor, for the triangle g_tri of the mesh g_mesh (prism.rint's main).
+McEdges g_mcEdges;
+McTri g_mcTri;
+void initMicroCells() {
+  g_mcEdges = mcEdges(TRI.S, TRI.t);
+  for (int k = 0; k < 3; ++k) {
+    g_mcTri.p[k] = TRI.p[k];
+    g_mcTri.n[k] = TRI.n[k];
+    g_mcTri.t[k] = TRI.t[k];
   }
-  return true;
-}
-double crossParamRaw(int e, int type, int c) {
-  precise dvec2 a = edgeSA(e), b = edgeSB(e);
-  precise double t;
-  if (type == LINE_V) t = (double(c) - a.x) / (b.x - a.x);
-  else if (type == LINE_H) t = (double(c) - a.y) / (b.y - a.y);
-  else t = (double(c) - (a.x - a.y)) / ((b.x - b.y) - (a.x - a.y));
-  return (isinf(t) || isnan(t)) ? 0.0 : t;
-}
-double crossParam(int e, int type, int c) { return clamp(crossParamRaw(e, type, c), 0.0, 1.0); }
-
-MicroVertex onEdge(int e, double t, float rawHeight) {
-  int A = TRI.edgeA[e], B = TRI.edgeB[e];
-  precise float tf = float(t);
-  precise float w = 1.0 - tf;
-  precise vec3 P = w * TRI.p[A] + tf * TRI.p[B];
-  precise vec3 N = w * TRI.n[A] + tf * TRI.n[B];
-  precise float h = g_mesh.scale * (rawHeight + g_mesh.bias);
-  precise vec3 pos = P + h * normalizeF(N);
-  precise vec2 uv = w * TRI.t[A] + tf * TRI.t[B];
-  return MicroVertex(pos, uv);
+  g_mcTri.uvToBary = TRI.uvToBary;
+  g_mcTri.scale = g_mesh.scale;
+  g_mcTri.bias = g_mesh.bias;
 }
 
-float lineHeight(int type, int c, dvec2 s) {
-  precise float r;
-  if (type == LINE_V) {
-    int j = int(floor(s.y));
-    precise float f = float(s.y - double(j));
-    r = mapAt(c, j) + f * (mapAt(c, j + 1) - mapAt(c, j));
-  } else if (type == LINE_H) {
-    int i = int(floor(s.x));
-    precise float f = float(s.x - double(i));
-    r = mapAt(i, c) + f * (mapAt(i + 1, c) - mapAt(i, c));
-  } else {
-    int j = int(floor(s.y)), i = j + c;
-    precise float f = float(s.y - double(j));
-    r = mapAt(i, j) + f * (mapAt(i + 1, j + 1) - mapAt(i, j));
-  }
-  return r;
-}
+float mcRaw(McHeights h, int i, int j) { return mapAt(i, j); }
+float mcMicroAt(McHeights h, dvec2 s) { return microAtSample(s); }
+McVertex mcGridVertex(McHeights h, int i, int j) { return mcGridInterior(g_mcTri, sampleToUV(i, j), mapAt(i, j)); }
 
-MicroVertex gridInterior(int i, int j) {
-  precise float raw = mapAt(i, j);
-  precise vec2 uv = sampleToUV(i, j);
-  precise vec2 b = baryOfUV(uv);
-  precise vec3 N = triN(b.x, b.y);
-  precise float h = g_mesh.scale * (raw + g_mesh.bias);
-  precise vec3 pos = triP(b.x, b.y) + h * normalizeF(N);
-  return MicroVertex(pos, uv);
-}
+void testMicro(McVertex v0, McVertex v1, McVertex v2);  // traversal.glsl
 
-// MicroCells::world. One call site per helper (NIR inlines every call: code size is
-// compile time on lavapipe), so the edge cases pick (edge, t, height) and share onEdge.
-MicroVertex worldPV(PV v) {
-  if (v.kind == KIND_TVERTEX) {
-    int k = v.a;
-    precise float h = microAtSample(TRI.S[k]);
-    precise vec3 pos = TRI.p[k] + h * TRI.n[k];
-    return MicroVertex(pos, TRI.t[k]);
-  }
-  int edge = -1;
-  precise double t = 0.0;
-  float raw = 0.0;
-  if (v.kind == KIND_CROSS) {
-    edge = v.a;
-    t = crossParam(v.a, v.lineType, v.lineC);
-    precise dvec2 s = edgeSA(v.a) + t * (edgeSB(v.a) - edgeSA(v.a));
-    raw = lineHeight(v.lineType, v.lineC, s);
-  } else {
-    // A grid point exactly on an edge of T is computed from that edge alone.
-    for (int e = 0; e < 3 && edge < 0; ++e)
-      if (orient2(edgeSA(e), edgeSB(e), v.s) == 0.0) {
-        precise dvec2 ab = edgeSB(e) - edgeSA(e);
-        precise dvec2 q = v.s - edgeSA(e);
-        t = clamp((q.x * ab.x + q.y * ab.y) / (ab.x * ab.x + ab.y * ab.y), 0.0, 1.0);
-        raw = mapAt(v.a, v.b);
-        edge = e;
-      }
-    if (edge < 0) return gridInterior(v.a, v.b);
-  }
-  return onEdge(edge, t, raw);
-}
-
-// Polygon buffers of MicroCells::clipped (two of 8; Sutherland-Hodgman ping-pongs).
-PV g_pv[16];
-
-PV gridPV(int i, int j, int nextType, int nextC) {
-  PV v;
-  v.s = dvec2(i, j);
-  v.kind = KIND_GRID;
-  v.a = i;
-  v.b = j;
-  v.lineType = 0;
-  v.lineC = 0;
-  v.nextType = nextType;
-  v.nextC = nextC;
-  return v;
-}
-
-// MicroCells::clip: polygon at g_pv[inBase..] against edge e into g_pv[outBase..].
-int clipPoly(int e, int inBase, int n, int outBase) {
-  int m = 0;
-  for (int k = 0; k < n; ++k) {
-    PV a = g_pv[inBase + k];
-    PV b = g_pv[inBase + (k + 1) % n];
-    bool ia = insideEdge(e, a.s), ib = insideEdge(e, b.s);
-    if (ia) g_pv[outBase + m++] = a;
-    if (ia != ib) {
-      PV x;
-      x.lineType = 0;
-      x.lineC = 0;
-      if (a.nextType == LINE_EDGE) {
-        int e2 = a.nextC;
-        int k3 = (e2 + 1) % 3 == e ? e : ((e + 1) % 3 == e2 ? e2 : -1);
-        x.kind = KIND_TVERTEX;
-        x.a = k3 >= 0 ? k3 : 0;
-        x.b = 0;
-        x.s = TRI.S[x.a];
-      } else {
-        x.kind = KIND_CROSS;
-        x.a = e;
-        x.b = 0;
-        x.lineType = a.nextType;
-        x.lineC = a.nextC;
-        precise double t = crossParamRaw(e, a.nextType, a.nextC);
-        x.s = edgeSA(e) + t * (edgeSB(e) - edgeSA(e));
-      }
-      if (ia) {
-        x.nextType = LINE_EDGE;
-        x.nextC = e;
-      } else {
-        x.nextType = a.nextType;
-        x.nextC = a.nextC;
-      }
-      g_pv[outBase + m++] = x;
-    }
-  }
-  return m;
-}
-
-bool cellInterior(int i, int j) {
-  for (int k = 0; k < 4; ++k)
-    if (!strictlyInside(dvec2(i + (k & 1), j + (k >> 1)))) return false;
-  return true;
-}
-
-void testMicro(MicroVertex v0, MicroVertex v1, MicroVertex v2);  // traversal.glsl
-
-// MicroCells::cell, each micro-triangle tested as it is emitted (same order as the
-// CPU's buffer). Returns how many. An interior cell (four corners strictly inside T)
-// is the fan of its corners (v00, v10, v11, v01): the CPU's two triangles (v00, v10,
-// v11), (v00, v11, v01); its corners go through worldPV, whose on-edge test fails for
-// points strictly inside, so they come from gridInterior as on the CPU. One loop and
-// one call site for the vertices and the test keep the inlined shader small.
+// MicroCells::cell, each micro-triangle tested as it is emitted (the CPU's order).
+// Returns how many. An interior cell (four corners strictly inside T) is the fan of its
+// corners (v00, v10, v11, v01): the CPU's two triangles (v00, v10, v11), (v00, v11, v01).
+// One loop and one call site for the vertices and the test keep the inlined shader small.
 int microCell(int i, int j) {
   if (TRI.uvArea2 == 0.0) return 0;
-  bool interior = cellInterior(i, j);
+  bool interior = mcInterior(g_mcEdges, i, j);
+  int mask = interior ? 0 : mcClipMask(g_mcEdges, i, j);
   int count = 0;
   for (int hf = 0; hf < (interior ? 1 : 2); ++hf) {
-    int poly = 0, tmp = 8;
-    int m = 0;
+    int base = 0, m = 4;
     if (interior) {
-      g_pv[tmp + 0] = gridPV(i, j, LINE_H, j);
-      g_pv[tmp + 1] = gridPV(i + 1, j, LINE_V, i + 1);
-      g_pv[tmp + 2] = gridPV(i + 1, j + 1, LINE_H, j + 1);
-      g_pv[tmp + 3] = gridPV(i, j + 1, LINE_V, i);
-      m = 4;
+      g_mcBuf[0] = mcGridPV(i, j, 0, 0);
+      g_mcBuf[1] = mcGridPV(i + 1, j, 0, 0);
+      g_mcBuf[2] = mcGridPV(i + 1, j + 1, 0, 0);
+      g_mcBuf[3] = mcGridPV(i, j + 1, 0, 0);
     } else {
-      int n = 0;
-      if (hf == 0) {  // lower: (i,j) (i+1,j) (i+1,j+1)
-        g_pv[poly + n++] = gridPV(i, j, LINE_H, j);
-        g_pv[poly + n++] = gridPV(i + 1, j, LINE_V, i + 1);
-        g_pv[poly + n++] = gridPV(i + 1, j + 1, LINE_D, i - j);
-      } else {  // upper: (i,j) (i+1,j+1) (i,j+1)
-        g_pv[poly + n++] = gridPV(i, j, LINE_D, i - j);
-        g_pv[poly + n++] = gridPV(i + 1, j + 1, LINE_H, j + 1);
-        g_pv[poly + n++] = gridPV(i, j + 1, LINE_V, i);
-      }
-      for (int e = 0; e < 3 && n > 0; ++e) {
-        n = clipPoly(e, poly, n, tmp);
-        int s = poly;
-        poly = tmp;
-        tmp = s;
-      }
-      // Drop repeated vertices (a grid point on an edge can appear twice).
-      for (int k = 0; k < n; ++k)
-        if (m == 0 || !pvSame(g_pv[poly + k], g_pv[tmp + m - 1])) g_pv[tmp + m++] = g_pv[poly + k];
-      while (m > 1 && pvSame(g_pv[tmp], g_pv[tmp + m - 1])) --m;
+      m = mcHalf(g_mcEdges, i, j, hf, mask, 0, base);
     }
     if (m < 3) continue;
-    int nv = min(m, 8);
-    MicroVertex w[8];
-    for (int k = 0; k < nv; ++k) w[k] = worldPV(g_pv[tmp + k]);
-    for (int k = 1; k + 1 < nv; ++k) {
+    McVertex w[OBLONG_MC_POLY];
+    for (int k = 0; k < m; ++k) w[k] = mcWorld(g_mcTri, g_mcEdges, 0, g_mcBuf[base + k], mask);
+    for (int k = 1; k + 1 < m; ++k) {
       testMicro(w[0], w[k], w[k + 1]);
       ++count;
     }

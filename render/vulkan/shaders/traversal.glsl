@@ -51,14 +51,14 @@ dvec2 g_sbLo, g_sbHi;
 // ClosestHit
 bool g_found;
 float g_hitT;
-MicroVertex g_hv0, g_hv1, g_hv2;
+McVertex g_hv0, g_hv1, g_hv2;
 vec3 g_hb;
 // counters
 int g_boxes, g_rangeQueries, g_inversions, g_cells, g_microTris;
 bool g_boxOnly;
 
 // ---- ClosestHit::test ----------------------------------------------------------------
-void testMicro(MicroVertex v0, MicroVertex v1, MicroVertex v2) {
+void testMicro(McVertex v0, McVertex v1, McVertex v2) {
   float t;
   vec3 b;
   float hi = g_found ? (g_hitT < g_tmax ? g_hitT : g_tmax) : g_tmax;  // std::min(tmax, t)
