@@ -290,20 +290,17 @@ float Displacement::bilinear(const vec2& uv) const {
   return scale * (H + bias);
 }
 
+namespace {
+// The heights of one ray, as the kernel (core/kernels/heights.h) reads them.
+struct RayHeights {
+  const Displacement& d;
+  float f;
+  friend float dispRaw(const RayHeights& h, int i, int j) { return h.d.raw(i, j, h.f); }
+};
+}  // namespace
+
 float Displacement::microAtSample(const dvec2& s, float f) const {
-  const double fi = std::floor(s.x), fj = std::floor(s.y);
-  const int i = int(fi), j = int(fj);
-  const float fx = float(s.x - fi), fy = float(s.y - fj);
-  const float h00 = raw(i, j, f), h11 = raw(i + 1, j + 1, f);
-  float H;
-  if (fx >= fy) {  // lower triangle (i,j), (i+1,j), (i+1,j+1)
-    const float h10 = raw(i + 1, j, f);
-    H = h00 + fx * (h10 - h00) + fy * (h11 - h10);
-  } else {  // upper triangle (i,j), (i+1,j+1), (i,j+1)
-    const float h01 = raw(i, j + 1, f);
-    H = h00 + fy * (h01 - h00) + fx * (h11 - h01);
-  }
-  return scale * (H + bias);
+  return shared::dispMicroAt(RayHeights{*this, f}, s, scale, bias);
 }
 
 float Displacement::micro(const vec2& uv, float f) const { return microAtSample(toSample(uv), f); }

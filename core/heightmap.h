@@ -8,6 +8,7 @@
 
 #include "core/math.h"
 #include "core/memory.h"
+#include "core/kernels/heights.h"
 #include "core/kernels/texels.h"
 
 #include <algorithm>
@@ -80,13 +81,11 @@ struct Displacement {
   // is (i, j).
   dvec2 toSample(const vec2& uv) const { return toSample(dvec2(uv)); }
   dvec2 toSample(const dvec2& uv) const {
-    return {uv.x * double(tiling.x) * map->width() - sampleOffset,
-            uv.y * double(tiling.y) * map->height() - sampleOffset};
+    return shared::dispToSample(uv, tiling, map->width(), map->height(), sampleOffset);
   }
   // uv of the sample point (i, j) (inverse of toSample).
   vec2 sampleToUV(double i, double j) const {
-    return vec2(float((i + sampleOffset) / (double(map->width()) * tiling.x)),
-                float((j + sampleOffset) / (double(map->height()) * tiling.y)));
+    return shared::dispSampleToUV(i, j, tiling, map->width(), map->height(), sampleOffset);
   }
 
   // The blend fraction f of a ray at level of detail `rayLod` (< 0: none) on this
@@ -101,21 +100,18 @@ struct Displacement {
     return map->at(i, j);
   }
   // The height at level k's point (i, j) of the surface at λ = k + f: level k's height
-  // blended toward level k + 1's micro-geometry there (docs/lod.md); each step clamped
-  // into the values it is made of, so float rounding never leaves their range.
+  // blended toward level k + 1's micro-geometry there (docs/lod.md; the formula is
+  // core/kernels/heights.h's dispLodHeight).
   static float lodHeight(const HeightMap& level, const HeightMap& next, int i, int j, float f) {
-    const float h = level.at(i, j);
-    if (f == 0.0f) return h;
-    // Level k + 1 at level k's point (i/2, j/2): a coarse sample, the middle of a coarse
-    // cell edge, or (both odd) the middle of the cell's diagonal (a, b)-(a+1, b+1),
-    // which the micro-geometry's split puts in both of its triangles.
-    const int a = i >> 1, b = j >> 1;
-    const float p = next.at(a, b);
-    const float q = !(i & 1) && !(j & 1) ? p : !(j & 1) ? next.at(a + 1, b) : !(i & 1) ? next.at(a, b + 1)
-                                                                                   : next.at(a + 1, b + 1);
-    const float L = std::clamp(0.5f * (p + q), std::min(p, q), std::max(p, q));
-    return std::clamp((1.0f - f) * h + f * L, std::min(h, L), std::max(h, L));
+    return shared::dispLodHeight(LodMaps{level, next}, i, j, f);
   }
+  // The two levels, as the kernel (core/kernels/heights.h) reads them.
+  struct LodMaps {
+    const HeightMap& level;
+    const HeightMap& next;
+    friend float dispLevel(const LodMaps& m, int i, int j) { return m.level.at(i, j); }
+    friend float dispNext(const LodMaps& m, int i, int j) { return m.next.at(i, j); }
+  };
 
   // Height of one sample point (grid vertex of the micro-geometry).
   float sampleHeight(int i, int j, float f = 0.0f) const { return scale * (raw(i, j, f) + bias); }

@@ -383,14 +383,16 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
   fmt::print("vulkan step parity, CPU branches reached{}: newton/Inversions {}, newton/Fallbacks (cubic) {}, "
              "traversal/RejectedInversions {}, traversal/TurningSplits {}, traversal/BoxOnlyPrisms {}, "
              "traversal/IllPosedTriangles {}, traversal/MarchStops {}, traversal/PrismGrazes {}, "
-             "traversal/StackOverflows {}, traversal/WideLeaves {}\n",
+             "traversal/StackOverflows {}, traversal/WideLeaves {}, traversal/ClippedCells {}\n",
              stats1.empty() ? " (statistics not compiled in)" : "", delta("newton/Inversions"),
              delta("newton/Fallbacks"), delta("traversal/RejectedInversions"), delta("traversal/TurningSplits"),
              delta("traversal/BoxOnlyPrisms"), delta("traversal/IllPosedTriangles"), delta("traversal/MarchStops"),
-             delta("traversal/PrismGrazes"), delta("traversal/StackOverflows"), delta("traversal/WideLeaves"));
+             delta("traversal/PrismGrazes"), delta("traversal/StackOverflows"), delta("traversal/WideLeaves"),
+             delta("traversal/ClippedCells"));
   // The branches these families reach, held: a family change that stops reaching one
   // would leave that branch's GPU mirror unchecked. Not reached by these families (so
-  // not mirrored by test): rejected inversions, prism grazes and stack overflows.
+  // not mirrored by test): rejected inversions and prism grazes; stack overflows are the
+  // shallow-stack test's.
   if (!stats1.empty()) {
     CHECK(delta("newton/Inversions") > 0);
     CHECK(pickedFallbacks > 0);
@@ -399,6 +401,7 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
     CHECK(delta("traversal/BoxOnlyPrisms") > 0);
     CHECK(delta("traversal/IllPosedTriangles") > 0);
     CHECK(delta("traversal/MarchStops") > 0);
+    CHECK(delta("traversal/ClippedCells") > 0);  // the micro-cells' clip (core/kernels/microcells.h)
   }
   CHECK(total.hits > total.rays / 10);
 }

@@ -59,6 +59,7 @@ OBLONG_STAT_COUNTER("traversal/RejectedInversions", travBadInversions);
 OBLONG_STAT_COUNTER("traversal/StackOverflows", travOverflows);
 OBLONG_STAT_COUNTER("traversal/MarchStops", travMarchStops);  // marching ended by the closest hit
 OBLONG_STAT_COUNTER("traversal/WideLeaves", travWideLeaves);  // leaves subdivided as boxes (wide ε)
+OBLONG_STAT_COUNTER("traversal/ClippedCells", travClippedCells);  // tested cells on an edge of T
 
 // The counters of one intersect() call, flushed to RayCounters and the statistics once.
 inline void flushCounters(const RayCounters& local, bool hit, RayCounters& c) {
@@ -389,6 +390,7 @@ class RayPatch final : public SplitContext {
       hit_.testCell(watertightRay_, q, ray_.tmin, ray_.tmax);
       return;
     }
+    OBLONG_STAT_INC(travClippedCells);
     const int n = cells().clippedCell(I, J, buf, cache());
     counters_.microTriangles += n;
     for (int k = 0; k < n; ++k) hit_.test(watertightRay_, buf[k], ray_.tmin, ray_.tmax);

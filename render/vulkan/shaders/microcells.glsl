@@ -1,8 +1,7 @@
 // The micro-geometry cell by cell (docs/design.md §1): the construction and the vertices
 // are the CPU's own code (core/kernels/microcells.h), as is the watertight
-// ray/micro-triangle test (core/kernels/microtri.h); here are their heights (the map,
-// its level of detail per ray, Displacement's sample conversions, ported line for line)
-// and the cell's loop. Every float and double operation is `precise` (SPIR-V
+// ray/micro-triangle test (core/kernels/microtri.h) and the heights (core/kernels/heights.h);
+// here are the texel fetch, the choice of a level of detail per ray and the cell's loop. Every float and double operation is `precise` (SPIR-V
 // NoContraction): no fused multiply-add, so the micro-vertices, edge functions and t come
 // out as the CPU computes them, which both watertightness and CPU/GPU parity rely on.
 // Needs the globals of prism.rint and traversal.glsl: g_tri, g_mesh, the ray (g_wr) and
@@ -16,27 +15,18 @@
 float levelAt(MeshGpu m, int i, int j) {  // HeightMap::at of a record's map
   return texelAt(m.texelOffset + uint(wrapIndex(j, m.H)) * uint(m.W) + uint(wrapIndex(i, m.W)), m.chunkShift);
 }
-// std::min, std::max and std::clamp as the CPU evaluates them (which argument wins a tie).
+// std::min and std::max as the CPU evaluates them (which argument wins a tie).
 float minCpp(float a, float b) { return b < a ? b : a; }
 float maxCpp(float a, float b) { return a < b ? b : a; }
-float clampCpp(float v, float lo, float hi) { return v < lo ? lo : hi < v ? hi : v; }
-// Displacement::lodHeight: level k's height h at its point (i, j), blended by f toward
-// level k + 1's micro-geometry there (g_next).
-float lodHeight(float h, int i, int j, float f) {
-  int a = i >> 1, b = j >> 1;
-  float p = levelAt(g_next, a, b);
-  bool ei = (i & 1) == 0, ej = (j & 1) == 0;
-  float q = ei && ej ? p : ej ? levelAt(g_next, a + 1, b) : ei ? levelAt(g_next, a, b + 1) : levelAt(g_next, a + 1, b + 1);
-  precise float s = 0.5 * (p + q);
-  float L = clampCpp(s, minCpp(p, q), maxCpp(p, q));
-  precise float w = (1.0 - f) * h + f * L;
-  return clampCpp(w, minCpp(h, L), maxCpp(h, L));
-}
-// Displacement::raw: the ray's blend fraction g_blend is 0 unless it has a λ per ray.
-float mapAt(int i, int j) {
-  float h = levelAt(g_mesh, i, j);
-  return g_blend == 0.0 ? h : lodHeight(h, i, j, g_blend);
-}
+// Displacement::raw and lodHeight: the kernel (core/kernels/heights.h) on the ray's level
+// g_mesh and the next one g_next; the ray's blend fraction g_blend is 0 unless it has a λ
+// per ray.
+#define Maps int
+#include "core/kernels/heights.h"
+float dispLevel(Maps m, int i, int j) { return levelAt(g_mesh, i, j); }
+float dispNext(Maps m, int i, int j) { return levelAt(g_next, i, j); }
+float mapAt(int i, int j) { return dispLodHeight(0, i, j, g_blend); }
+float dispRaw(Maps m, int i, int j) { return mapAt(i, j); }
 // A λ per ray (PerRayLod::intersect, Displacement::blendOf): the record of level ⌊λ⌋
 // (λ clamped to [0, last level]; NaN: 0) and the fraction toward the next level.
 void selectLevel(float rayLod) {
@@ -47,35 +37,12 @@ void selectLevel(float rayLod) {
   g_next = meshes[g_mesh.lodNext];
   if (rayLod > g_mesh.lod) g_blend = min(float(double(rayLod) - double(g_mesh.lod)), 1.0);
 }
-// Displacement::sampleToUV
+// Displacement::sampleToUV, toSample, microAtSample
 vec2 sampleToUV(int i, int j) {
-  precise double x = (double(i) + double(g_mesh.sampleOffset)) / (double(g_mesh.W) * double(g_mesh.tiling.x));
-  precise double y = (double(j) + double(g_mesh.sampleOffset)) / (double(g_mesh.H) * double(g_mesh.tiling.y));
-  return vec2(float(x), float(y));
+  return dispSampleToUV(double(i), double(j), g_mesh.tiling, g_mesh.W, g_mesh.H, double(g_mesh.sampleOffset));
 }
-// Displacement::toSample
-dvec2 toSample(dvec2 uv) {
-  precise dvec2 r = dvec2(uv.x * double(g_mesh.tiling.x) * double(g_mesh.W) - double(g_mesh.sampleOffset),
-                          uv.y * double(g_mesh.tiling.y) * double(g_mesh.H) - double(g_mesh.sampleOffset));
-  return r;
-}
-// Displacement::microAtSample
-float microAtSample(dvec2 s) {
-  precise double fi = floor(s.x), fj = floor(s.y);
-  int i = int(fi), j = int(fj);
-  precise float fx = float(s.x - fi), fy = float(s.y - fj);
-  precise float h00 = mapAt(i, j), h11 = mapAt(i + 1, j + 1);
-  precise float H;
-  if (fx >= fy) {
-    precise float h10 = mapAt(i + 1, j);
-    H = h00 + fx * (h10 - h00) + fy * (h11 - h10);
-  } else {
-    precise float h01 = mapAt(i, j + 1);
-    H = h00 + fy * (h01 - h00) + fx * (h11 - h01);
-  }
-  precise float r = g_mesh.scale * (H + g_mesh.bias);
-  return r;
-}
+dvec2 toSample(dvec2 uv) { return dispToSample(uv, g_mesh.tiling, g_mesh.W, g_mesh.H, double(g_mesh.sampleOffset)); }
+float microAtSample(dvec2 s) { return dispMicroAt(0, s, g_mesh.scale, g_mesh.bias); }
 
 // ---- MicroCells: the CPU's own code (core/kernels/microcells.h) ----------------------
 #define McHeights int  // the heights are the globals above (mapAt)

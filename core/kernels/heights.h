@@ -1,0 +1,82 @@
+// A displacement's sample grid and the heights of its micro-geometry (Displacement,
+// core/heightmap.h: docs/design.md §1, docs/lod.md), written once for the CPU and the
+// Vulkan shaders.
+//
+// The texels are each side's own, as in rmip_query.h: a type Maps with functions the
+// includer provides (C++: template parameter; GLSL: a macro naming a type, functions
+// defined after this header, which declares them):
+//   float dispLevel(Maps m, int i, int j)  texel (i, j) of the ray's level (wrapped)
+//   float dispNext(Maps m, int i, int j)   texel (i, j) of the next level (λ per ray)
+//   float dispRaw(Maps m, int i, int j)    the raw height of sample (i, j) for the ray
+//                                          (dispLodHeight at its blend fraction)
+#ifndef OBLONG_KERNELS_HEIGHTS_H
+#define OBLONG_KERNELS_HEIGHTS_H
+
+#include "core/kernels/lang.h"
+
+OBLONG_KERNELS_BEGIN
+
+#ifndef __cplusplus
+float dispLevel(Maps m, int i, int j);
+float dispNext(Maps m, int i, int j);
+float dispRaw(Maps m, int i, int j);
+#endif
+
+// Continuous sample coordinates of a uv on a W x H map tiled `tiling` times, uv 0 at
+// sample −offset (½ at level 0: the texel centre of texel (i, j) is (i, j)).
+OBLONG_INLINE dvec2 dispToSample(OBLONG_IN(dvec2) uv, OBLONG_IN(vec2) tiling, int W, int H, double offset) {
+  OBLONG_PRECISE dvec2 r = dvec2(uv.x * double(tiling.x) * double(W) - offset, uv.y * double(tiling.y) * double(H) - offset);
+  return r;
+}
+// The uv of sample point (i, j): the inverse of dispToSample.
+OBLONG_INLINE vec2 dispSampleToUV(double i, double j, OBLONG_IN(vec2) tiling, int W, int H, double offset) {
+  OBLONG_PRECISE double x = (i + offset) / (double(W) * double(tiling.x));
+  OBLONG_PRECISE double y = (j + offset) / (double(H) * double(tiling.y));
+  return vec2(float(x), float(y));
+}
+
+// std::clamp, written out: GLSL's clamp (FClamp) may return either zero of a tie of zeros.
+OBLONG_FORCE_INLINE float dispClamp(float v, float lo, float hi) { return v < lo ? lo : (hi < v ? hi : v); }
+
+// The height at level k's point (i, j) of the surface at λ = k + f: level k's height h
+// blended toward level k + 1's micro-geometry there (docs/lod.md), each step clamped into
+// the values it is made of, so float rounding never leaves their range. Level k + 1 at
+// level k's point (i/2, j/2) is a coarse sample, the middle of a coarse cell edge, or (both
+// odd) the middle of the cell's diagonal (a, b)-(a+1, b+1), which the micro-geometry's split
+// puts in both of its triangles. Minima, maxima and clamps break ties as std:: does.
+OBLONG_TEMPLATE1(Maps)
+OBLONG_INLINE float dispLodHeight(Maps m, int i, int j, float f) {
+  float h = dispLevel(m, i, j);
+  if (f == 0.0f) return h;
+  int a = i >> 1, b = j >> 1;
+  float p = dispNext(m, a, b);
+  float q = ((i | j) & 1) == 0 ? p : dispNext(m, a + (i & 1), b + (j & 1));
+  OBLONG_PRECISE float mid = 0.5f * (p + q);
+  float L = dispClamp(mid, q < p ? q : p, p < q ? q : p);
+  OBLONG_PRECISE float w = (1.0f - f) * h + f * L;
+  return dispClamp(w, L < h ? L : h, h < L ? L : h);
+}
+
+// The micro-geometry's height at sample point s: piecewise linear on the two triangles of
+// each grid cell split by the diagonal (i,j)-(i+1,j+1), then height = scale · (raw + bias).
+OBLONG_TEMPLATE1(Maps)
+OBLONG_INLINE float dispMicroAt(Maps m, OBLONG_IN(dvec2) s, float scale, float bias) {
+  double fi = floor(s.x), fj = floor(s.y);
+  int i = int(fi), j = int(fj);
+  OBLONG_PRECISE float fx = float(s.x - fi), fy = float(s.y - fj);
+  float h00 = dispRaw(m, i, j), h11 = dispRaw(m, i + 1, j + 1);
+  OBLONG_PRECISE float H;
+  if (fx >= fy) {  // lower triangle (i,j), (i+1,j), (i+1,j+1)
+    float h10 = dispRaw(m, i + 1, j);
+    H = h00 + fx * (h10 - h00) + fy * (h11 - h10);
+  } else {  // upper triangle (i,j), (i+1,j+1), (i,j+1)
+    float h01 = dispRaw(m, i, j + 1);
+    H = h00 + fy * (h01 - h00) + fx * (h11 - h01);
+  }
+  OBLONG_PRECISE float r = scale * (H + bias);
+  return r;
+}
+
+OBLONG_KERNELS_END
+
+#endif
