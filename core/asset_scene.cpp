@@ -274,8 +274,10 @@ std::optional<Material> objMaterial(const std::string& path, const AssetFlags& f
   const ObjMaterials refs = scanObj(path);
   if (refs.used.empty()) return std::nullopt;
   std::map<std::string, MtlMaterial> all;
+  bool missingLib = false;  // warned once for the file, not again per material
   for (const std::string& lib : refs.libs) {
     if (!fs::exists(lib)) {
+      missingLib = true;
       eprint("oblong: warning: {}: mtllib {}: file not found; its materials are not used\n", path, lib);
       continue;
     }
@@ -285,8 +287,9 @@ std::optional<Material> objMaterial(const std::string& path, const AssetFlags& f
   for (const std::string& name : refs.used) {
     const auto it = all.find(name);
     if (it == all.end()) {
-      if (!refs.libs.empty())
-        eprint("oblong: warning: {}: usemtl {}: no such material in {}\n", path, name, fmt::join(refs.libs, ", "));
+      if (!missingLib)
+        eprint("oblong: warning: {}: usemtl {}: no such material in {}\n", path, name,
+             refs.libs.empty() ? std::string("(no mtllib)") : fmt::format("{}", fmt::join(refs.libs, ", ")));
       continue;
     }
     used.push_back(fromMtl(it->second, fs::path(path).parent_path(), flags));

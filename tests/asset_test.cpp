@@ -291,3 +291,47 @@ TEST_CASE("a mesh file is told from a scene file by its extension", "[assets]") 
   CHECK_FALSE(oblong::isAssetPath("scene"));
   CHECK_FALSE(oblong::isAssetPath("scene.txt"));
 }
+
+TEST_CASE("what a mesh file's materials say and oblong does not use is named in a warning", "[assets][cli]") {
+  heightMap("height.png", OIIO::TypeDesc::UINT8);
+  // A missing .mtl: the mesh loads without it, one warning.
+  const CliRun nolib = runOblongCli("info " + write("nolib.obj", quadObj("nolib.mtl", "m")));
+  INFO(nolib.err);
+  CHECK(nolib.status == 0);
+  CHECK_THAT(nolib.err, Contains("nolib.obj: mtllib ") && Contains("nolib.mtl: file not found; its materials are not used"));
+  CHECK(std::count(nolib.err.begin(), nolib.err.end(), '\n') == 1);
+
+  // An undefined material.
+  write("few.mtl", "newmtl a\nKd 0.5 0.5 0.5\n");
+  const CliRun undefined = runOblongCli("info " + write("few.obj", quadObj("few.mtl", "b")));
+  CHECK(undefined.status == 0);
+  CHECK_THAT(undefined.err, Contains("few.obj: usemtl b: no such material in"));
+
+  // Two materials that differ: the displaced one is applied, the other named.
+  write("two.mtl", "newmtl plain\nKd 0.2 0.2 0.2\nnewmtl bumpy\nKd 0.5 0.5 0.5\ndisp -mm 0 0.1 height.png\n");
+  std::string obj = quadObj("two.mtl", "plain");
+  obj.insert(obj.rfind("f 1/1/1 3/3/1"), "usemtl bumpy\n");
+  const std::string two = write("two.obj", obj);
+  const CliRun both = runOblongCli("info " + two);
+  INFO(both.err);
+  CHECK(both.status == 0);
+  CHECK_THAT(both.err, Contains("two.obj: oblong applies one material to a whole mesh file: 'bumpy'; not used: 'plain'"));
+  const oblong::Scene s = oblong::loadAsset(two);
+  REQUIRE(s.meshes[0].displacement);
+  CHECK(s.meshes[0].albedo == oblong::vec3(0.5f));
+
+  // A glTF sampler that clamps, and an extension oblong does not read.
+  const nlohmann::json material = {
+      {"extensions",
+       {{"KHR_materials_displacement", {{"displacementGeometryTexture", {{"index", 0}}}}},
+        {"KHR_materials_clearcoat", {{"clearcoatFactor", 1}}}}}};
+  heightMap("height.exr", OIIO::TypeDesc::FLOAT);
+  nlohmann::json j = quadGltf(material, "data:application/octet-stream;base64," + oblong::test::base64(quadBuffer()));
+  j["textures"][0]["sampler"] = 0;
+  j["samplers"] = nlohmann::json::array({{{"wrapS", 33071}}});
+  const CliRun gltf = runOblongCli("info " + write("clamp.gltf", j.dump()));
+  INFO(gltf.err);
+  CHECK(gltf.status == 0);
+  CHECK_THAT(gltf.err, Contains("extensions.KHR_materials_clearcoat") &&
+                           Contains("samplers[0].wrapS 33071 (oblong repeats the map)"));
+}
