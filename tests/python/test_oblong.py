@@ -327,3 +327,14 @@ def test_load_mesh_file_as_cli(cli, tmp_path):
         oblong.load(str(path))
     assert str(e.value) == msg
     assert "quad.mtl: line 2: disp: -mm needs two numbers" in msg
+    # The mesh flags as keywords: the command line's --displacement, --scale, --bias, --tiling.
+    bare = tmp_path / "bare.obj"
+    bare.write_text(path.read_text().replace("mtllib quad.mtl\n", "").replace("usemtl m\n", ""))
+    flags = dict(displacement=COBBLES, scale=0.1, bias=-0.5, tiling=(2, 1.5))
+    got = oblong.load(str(bare), **flags).trace(o, dirs)
+    assert np.count_nonzero(got["mesh"] == 0) > 50
+    want, _ = cli_trace(cli, tmp_path, [bare], o, dirs, 0.0, np.inf,
+                        ["--displacement", COBBLES, "--scale", "0.1", "--bias", "-0.5", "--tiling", "2,1.5"])
+    assert_same_hits(got, want)
+    with pytest.raises(oblong.Error, match=r"^--scale: applies to a mesh file"):
+        oblong.load(None, scale=2)
