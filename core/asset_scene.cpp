@@ -637,8 +637,11 @@ Scene loadAsset(const std::string& path, const AssetFlags& flags) {
     // value came from instead.
     const std::string msg = e.what();
     for (const auto& [key, repl] : src.keys) {
-      const std::string prefix = path + ": " + key + ": ";
-      if (msg.rfind(prefix, 0) == 0) throw Error((repl.empty() ? "" : repl + ": ") + msg.substr(prefix.size()));
+      const std::string prefix = path + ": " + key;
+      if (msg.rfind(prefix, 0) != 0) continue;
+      const std::string rest = msg.substr(prefix.size());  // ": problem", or "[i]: problem" of an array
+      if (rest.rfind(": ", 0) == 0) throw Error(repl.empty() ? rest.substr(2) : repl + rest);
+      if (rest.rfind("[", 0) == 0 && !repl.empty()) throw Error(repl + " " + rest);
     }
     throw;
   }

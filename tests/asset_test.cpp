@@ -268,6 +268,14 @@ TEST_CASE("bad mesh-file input gives one error line naming the file", "[assets][
   oneError(runOblongCli("info " + write("embedded.glb", glbOf(embedded))),
            {"embedded.glb: images[0]: an image inside the file (bufferView) is not supported"});
 
+  nlohmann::json red = quadGltf({{"pbrMetallicRoughness", {{"baseColorFactor", {2, 0, 0, 1}}}}}, "");
+  oneError(runOblongCli("info " + write("red.glb", glbOf(red))),
+           {"red.glb: materials[0].pbrMetallicRoughness.baseColorFactor: components must lie in [0, 1]"});
+  oneError(runOblongCli("info " + write("broken.gltf", "{\"asset\": ")), {"broken.gltf: malformed glTF JSON"});
+  write("huge.mtl", "newmtl m\ndisp -s 1e300 1 height.png\n");
+  oneError(runOblongCli("info " + write("huge.obj", quadObj("huge.mtl", "m"))),
+           {"huge.mtl: line 2: disp -s [0]: must be a finite number"});
+
   const std::string bare = write("bare2.obj", quadObj("", ""));
   oneError(runOblongCli("info " + bare + " --scale 2"), {"--scale: ", "bare2.obj has no displacement map"});
   oneError(runOblongCli("info " + bare + " --displacement " + (dir() / "height.png").string() + " --scale 0"),
