@@ -33,7 +33,18 @@ void warnLodClamped(const Scene& scene) {
 
 }  // namespace
 
-Scene sceneFrom(const std::string& path) { return path.empty() ? defaultScene() : loadScene(path); }
+Scene sceneFrom(const std::string& path, const AssetFlags& asset) {
+  if (!path.empty() && isAssetPath(path)) return loadAsset(path, asset);
+  if (asset.any()) {
+    const char* flag = !asset.displacement.empty() ? "--displacement"
+                       : asset.scale              ? "--scale"
+                       : asset.bias               ? "--bias"
+                                                  : "--tiling";
+    fail(flag, "applies to a mesh file given instead of a scene ({})",
+         path.empty() ? std::string("the built-in scene has its own") : path + " is a scene file: set it there");
+  }
+  return path.empty() ? defaultScene() : loadScene(path);
+}
 
 ivec2 parseSize(const std::string& s) {
   std::smatch m;

@@ -5,6 +5,7 @@
 // line's flag: "--range: unknown strategy 'x' (known: ...)").
 #pragma once
 
+#include "core/asset_scene.h"
 #include "core/scene.h"
 #include "render/embree_scene.h"
 #include "render/renderer.h"
@@ -17,8 +18,11 @@
 
 namespace oblong {
 
-// The scene file at `path`, or the built-in default scene for an empty path.
-Scene sceneFrom(const std::string& path);
+// The scene file at `path`, or the built-in default scene for an empty path; a mesh file
+// (by its extension, core/asset_scene.h) is read as a mesh with its material, which
+// `asset` (--displacement, --scale, --bias, --tiling) may replace. Those flags with a
+// scene file or the built-in scene are an error.
+Scene sceneFrom(const std::string& path, const AssetFlags& asset = {});
 
 // "WxH" (--size), at most kMaxImagePixels; a seed, a decimal integer in [0, 2^64) (--seed).
 ivec2 parseSize(const std::string& s);

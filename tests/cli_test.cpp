@@ -580,7 +580,7 @@ std::vector<std::string> optionWords(const std::string& text) {
 
 TEST_CASE("the README's usage block lists every option --help lists, and no other", "[cli][docs]") {
   // The indented block under "## Using it": one entry per "./build/oblong ..." line (with
-  // its continuation lines) and the "strategy flags:" entry.
+  // its continuation lines) and the "strategy flags:" and "mesh flags:" entries.
   std::istringstream readme(oblong::test::slurp(std::string(OBLONG_SOURCE_DIR) + "/README.md"));
   std::vector<std::string> entries;
   bool inSection = false;
@@ -598,7 +598,8 @@ TEST_CASE("the README's usage block lists every option --help lists, and no othe
     const size_t b = line.find_first_not_of(' ');
     if (b == std::string::npos) continue;
     const std::string text = line.substr(b);
-    if (text.rfind("./build/oblong ", 0) == 0 || text.rfind("strategy flags:", 0) == 0)
+    if (text.rfind("./build/oblong ", 0) == 0 || text.rfind("strategy flags:", 0) == 0 ||
+        text.rfind("mesh flags:", 0) == 0)
       entries.push_back(text);
     else if (!entries.empty())
       entries.back() += " " + text;
@@ -608,15 +609,19 @@ TEST_CASE("the README's usage block lists every option --help lists, and no othe
     for (const auto& e : entries) s += e + "\n";
     return s;
   }());
-  std::string strategyFlags;
-  for (const auto& e : entries)
+  std::string strategyFlags, meshFlags;
+  for (const auto& e : entries) {
     if (e.rfind("strategy flags:", 0) == 0) strategyFlags = e;
+    if (e.rfind("mesh flags:", 0) == 0) meshFlags = e;
+  }
   REQUIRE(!strategyFlags.empty());
+  REQUIRE(!meshFlags.empty());
   auto usage = [&](const std::string& sub) {
     std::string s;
     for (const auto& e : entries)
       if (e.rfind("./build/oblong " + sub, 0) == 0) s += e.substr(e.find(sub) + sub.size()) + " ";
-    if (s.find("[strategy flags]") != std::string::npos) s += strategyFlags.substr(15);
+    if (s.find("[strategy flags]") != std::string::npos) s += strategyFlags.substr(15) + " ";
+    if (s.find("[mesh flags]") != std::string::npos) s += meshFlags.substr(11);
     return s;
   };
   // The top level: --version has its line, every command has its entry.

@@ -1,4 +1,6 @@
 // oblong: command-line front end.
+// SCENE is a scene file (JSON) or a mesh file with its material (docs/assets.md), whose
+// displacement --displacement, --scale, --bias and --tiling set.
 //   oblong render [SCENE.json] -o out.png [--size WxH] [--spp N] [--integrator primary|ao|path] [--seed S]
 //                 [--normals micro|smooth] [--threads N] [--aovs out.exr] [--heatmap steps.png]
 //                 [--stats out.json] [-q] [strategy flags]
@@ -68,6 +70,21 @@ std::vector<std::pair<std::string, std::string>> sceneInputs(const std::string& 
 
 // --device of render and trace: "cpu" (Embree) or "vulkan" (render/vulkan/commands.h).
 std::string deviceFlag = "cpu";
+
+// --displacement, --scale, --bias, --tiling: a mesh file's displacement (docs/assets.md).
+AssetFlags assetFlags;
+void addAssetFlags(CLI::App* app) {
+  app->add_option("--displacement", assetFlags.displacement,
+                  "with a mesh file: its height map (replaces the material's; docs/assets.md)");
+  app->add_option("--scale", assetFlags.scale, "with a mesh file: heights h = scale * (H + bias) (default: the "
+                                               "material's, else 1)");
+  app->add_option("--bias", assetFlags.bias, "with a mesh file: added to the map's H before --scale (default: the "
+                                             "material's, else 0)");
+  app->add_option("--tiling", assetFlags.tiling, "with a mesh file: T or TU,TV, uv multiplied before the map lookup "
+                                                 "(default: the material's, else 1)");
+}
+const char* kSceneHelp = "scene file (JSON) or mesh file (.obj, .gltf, .glb, .ply, ...: docs/assets.md); omit for "
+                         "the built-in default scene";
 
 // Set by Ctrl-C; a second Ctrl-C kills at once (SA_RESETHAND).
 std::atomic<bool> gInterrupted{false};
@@ -146,7 +163,7 @@ int runRender(const std::string& scenePath, const RenderFlags& rf, const RenderO
 
   Progress progress(mode);
   progress.phase("loading " + (scenePath.empty() ? std::string("the built-in scene") : scenePath));
-  Scene scene = sceneFrom(scenePath);
+  Scene scene = sceneFrom(scenePath, assetFlags);
   checkNotInputs(outputs, sceneInputs(scenePath, scene));
   flags.applyLod(scene);
   const double loadSeconds = progress.elapsed();
@@ -196,7 +213,7 @@ int runBake(const std::string& scenePath, const std::string& out, const std::str
             const std::string& raysPath, const StrategyFlags& flags) {
   checkOutputPath(out, "baked scene");
   checkNotInputs({{"-o", out}}, {{"scene", scenePath}, {"--rays", raysPath}});
-  Scene scene = sceneFrom(scenePath);
+  Scene scene = sceneFrom(scenePath, assetFlags);
   checkNotInputs({{"-o", out}}, sceneInputs(scenePath, scene));
   flags.applyLod(scene, "bake's rays carry no ray cones");
   const AccelOptions accelOpts = flags.resolve(scene);
@@ -214,7 +231,7 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   checkDistinctOutputs(outputs);
   checkNotInputs(outputs, {{"scene", scenePath}, {"--rays", raysPath}});
   const auto start = std::chrono::steady_clock::now();
-  Scene scene = sceneFrom(scenePath);
+  Scene scene = sceneFrom(scenePath, assetFlags);
   checkNotInputs(outputs, sceneInputs(scenePath, scene));
   flags.applyLod(scene, "a rays file carries no ray cones");
   const AccelOptions accelOpts = flags.resolve(scene);
@@ -252,7 +269,7 @@ int runExport(const std::string& scenePath, const std::string& out, const std::s
     fail(out, "the export is a binary PLY file: use a .ply name");
   checkNotInputs({{"-o", out}}, {{"scene", scenePath}});
   const auto start = std::chrono::steady_clock::now();
-  Scene scene = sceneFrom(scenePath);
+  Scene scene = sceneFrom(scenePath, assetFlags);
   checkNotInputs({{"-o", out}}, sceneInputs(scenePath, scene));
   StrategyFlags flags;
   flags.lod = lod;
@@ -303,7 +320,7 @@ int runStrategies(bool json) {
 }
 
 int runInfo(const std::string& scenePath, const std::string& range, const std::string& lod) {
-  Scene scene = sceneFrom(scenePath);
+  Scene scene = sceneFrom(scenePath, assetFlags);
   StrategyFlags flags;
   flags.range = range;
   flags.lod = lod;
@@ -328,7 +345,7 @@ int main(int argc, char** argv) {
   RenderOutputs ro;
 
   auto* render = app.add_subcommand("render", "render a scene (default: the built-in scene)");
-  render->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  render->add_option("scene", scenePath, kSceneHelp);
   auto* renderOut = render->add_option("-o,--output", ro.out, "output image (.png, .exr, .tif, .hdr, .pfm, ...)");
   render->add_option("--size", rf.size, "image size WxH, at most 2^26 pixels (default: the scene's)");
   render->add_option("--threads", rf.threads, "worker threads (0: all cores)");
@@ -347,6 +364,7 @@ int main(int argc, char** argv) {
                      "file or pipe) | never");
   render->add_option("--stats", ro.statsPath, "write configuration, timings, counters and memory as JSON");
   addStrategyFlags(render, flags);
+  addAssetFlags(render);
   // Only render traces a λ per ray (--lod cone), so only render has its bias.
   render->add_option("--lod-bias", flags.lodBias,
                      "levels added to each ray's λ under --lod cone (default: the scene's, 0)");
@@ -354,7 +372,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cpu", "vulkan"}));
 
   auto* trace = app.add_subcommand("trace", "first hit of every ray of a ray file");
-  trace->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  trace->add_option("scene", scenePath, kSceneHelp);
   trace->add_option("--rays", raysPath, "rays: CSV (ox,oy,oz,dx,dy,dz,tmin,tmax) or .bin (8 float32 per ray)")
       ->required();
   auto* traceOut = trace->add_option("-o,--output", hitsPath,
@@ -365,30 +383,34 @@ int main(int argc, char** argv) {
   bool traceQuiet = false;
   trace->add_flag("-q,--quiet", traceQuiet, "print nothing but warnings and errors (stderr): no summary");
   addStrategyFlags(trace, flags);
+  addAssetFlags(trace);
   trace->add_option("--device", deviceFlag, "cpu (Embree) | vulkan (ray tracing pipeline, docs/vulkan.md)")
       ->check(CLI::IsMember({"cpu", "vulkan"}));
 
   auto* bake = app.add_subcommand("bake", "write what the Vulkan path uploads into one file for oblong_vkbench");
   std::string bakeOut, bakeSize;
-  bake->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  bake->add_option("scene", scenePath, kSceneHelp);
   bake->add_option("-o,--output", bakeOut, "baked scene (.oblg, docs/vulkan.md)")->required();
   bake->add_option("--size", bakeSize, "camera rays' image size WxH (default: the scene's)");
   bake->add_option("--rays", raysPath, "also store this ray file (CSV or .bin, as for trace)");
   addStrategyFlags(bake, flags);
+  addAssetFlags(bake);
 
   auto* exportCmd = app.add_subcommand(
       "export", "write the displaced micro-geometry and the plain meshes as one PLY file (world coordinates)");
   std::string exportOut;
-  exportCmd->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  exportCmd->add_option("scene", scenePath, kSceneHelp);
   exportCmd->add_option("-o,--output", exportOut,
                         "binary little-endian PLY: float x y z u v per vertex, 3 vertices per triangle")
       ->required();
   exportCmd->add_option("--lod", lodFlag, "level of detail: off | a number >= 0 (default: the scene's)");
+  addAssetFlags(exportCmd);
 
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
-  info->add_option("scene", scenePath, "scene file (JSON); omit for the built-in default scene");
+  info->add_option("scene", scenePath, kSceneHelp);
   info->add_option("--range", range, "range-query strategy (default: the scene's)");
   info->add_option("--lod", lodFlag, "level of detail: off | a number >= 0 (default: the scene's)");
+  addAssetFlags(info);
   bool listStrategies = false, infoJson = false;
   info->add_flag("--strategies", listStrategies, "list the registered strategies (what --range etc. accept)");
   info->add_flag("--json", infoJson, "with --strategies: as JSON (read by the experiments)");

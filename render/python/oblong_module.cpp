@@ -384,15 +384,35 @@ PYBIND11_MODULE(oblong, m) {
 
   m.def(
       "load",
-      [](const py::object& path) {
-        if (path.is_none()) return loadFrom([] { return sceneFrom(""); });
+      [](const py::object& path, const py::object& displacement, const py::object& scale, const py::object& bias,
+         const py::object& tiling) {
+        // The command line's mesh flags (--displacement, --scale, --bias, --tiling).
+        AssetFlags flags;
+        if (!displacement.is_none()) flags.displacement = py::str(displacement).cast<std::string>();
+        if (!scale.is_none()) flags.scale = scale.cast<double>();
+        if (!bias.is_none()) flags.bias = bias.cast<double>();
+        if (!tiling.is_none()) {
+          if (py::isinstance<py::sequence>(tiling) && !py::isinstance<py::str>(tiling)) {
+            std::string t;
+            for (const py::handle& x : tiling.cast<py::sequence>())
+              t += (t.empty() ? "" : ",") + fmt::format("{}", x.cast<double>());
+            flags.tiling = t.empty() ? "," : t;
+          } else {
+            flags.tiling = fmt::format("{}", tiling.cast<double>());
+          }
+        }
+        if (path.is_none()) return loadFrom([flags] { return sceneFrom("", flags); });
         const std::string p = py::str(path).cast<std::string>();
         if (p.empty()) fail("scene", "empty file name (omit it for the built-in scene)");
-        return loadFrom([p] { return sceneFrom(p); });
+        return loadFrom([p, flags] { return sceneFrom(p, flags); });
       },
-      py::arg("path") = py::none(),
-      "The scene file at path (JSON, docs/scene_format.md), or the built-in default scene when\n"
-      "path is None. Bad input raises oblong.Error with the command line's message.");
+      py::arg("path") = py::none(), py::kw_only(), py::arg("displacement") = py::none(),
+      py::arg("scale") = py::none(), py::arg("bias") = py::none(), py::arg("tiling") = py::none(),
+      "The scene file at path (JSON, docs/scene_format.md), or a mesh file with its material\n"
+      "(docs/assets.md), or the built-in default scene when path is None. displacement, scale,\n"
+      "bias, tiling (a number or (tu, tv)): the command line's --displacement, --scale, --bias,\n"
+      "--tiling, for a mesh file only. Bad input raises oblong.Error with the command line's\n"
+      "message.");
   m.def(
       "load_dict",
       [](const py::dict& d, const std::string& path) {

@@ -305,3 +305,36 @@ def test_gil_released_while_rendering(default_scene):
     gaps = np.diff(ticks)
     assert out["seconds"] > 0.3, "the render is too short to tell"
     assert len(ticks) > 20 and gaps.max() < 0.5 * out["seconds"], (len(ticks), gaps.max(), out["seconds"])
+
+
+def test_load_mesh_file_as_cli(cli, tmp_path):
+    # A mesh file is a scene too (docs/assets.md): its MTL's disp, as the command line reads it.
+    (tmp_path / "quad.mtl").write_text(f"newmtl m\nKd 0.5 0.6 0.7\ndisp -mm -0.05 0.1 -s 2 2 {COBBLES}\n")
+    (tmp_path / "quad.obj").write_text(
+        "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n"
+        "usemtl m\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n")
+    path = tmp_path / "quad.obj"
+    scene = oblong.load(str(path))
+    o, dirs = rays_toward([0, 0, 0], 2.0, 400, seed=5, spread=0.8)
+    got = scene.trace(o, dirs)
+    assert np.count_nonzero(got["mesh"] == 0) > 50
+    want, _ = cli_trace(cli, tmp_path, [path], o, dirs, 0.0, np.inf)
+    assert_same_hits(got, want)
+    # A bad material is the command line's one line.
+    (tmp_path / "quad.mtl").write_text("newmtl m\ndisp -mm 0.1 missing.png\n")
+    msg = cli.error("info", path)
+    with pytest.raises(oblong.Error) as e:
+        oblong.load(str(path))
+    assert str(e.value) == msg
+    assert "quad.mtl: line 2: disp: -mm needs two numbers" in msg
+    # The mesh flags as keywords: the command line's --displacement, --scale, --bias, --tiling.
+    bare = tmp_path / "bare.obj"
+    bare.write_text(path.read_text().replace("mtllib quad.mtl\n", "").replace("usemtl m\n", ""))
+    flags = dict(displacement=COBBLES, scale=0.1, bias=-0.5, tiling=(2, 1.5))
+    got = oblong.load(str(bare), **flags).trace(o, dirs)
+    assert np.count_nonzero(got["mesh"] == 0) > 50
+    want, _ = cli_trace(cli, tmp_path, [bare], o, dirs, 0.0, np.inf,
+                        ["--displacement", COBBLES, "--scale", "0.1", "--bias", "-0.5", "--tiling", "2,1.5"])
+    assert_same_hits(got, want)
+    with pytest.raises(oblong.Error, match=r"^--scale: applies to a mesh file"):
+        oblong.load(None, scale=2)
