@@ -115,10 +115,12 @@ void printRenderSummary(const RenderReport& r) {
     fmt::print("  partial  : interrupted; {} of {} pixels rendered (the rest is black)\n", res.pixelsDone,
                int64_t(o.size.x) * o.size.y);
   if (!r.heatmap.empty()) {
-    float maxSteps = 0;
-    for (float st : res.aov.steps) maxSteps = std::max(maxSteps, st);
-    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {:.0f}\n", r.heatmap,
-               std::max(1.0f, maxSteps));
+    const HeatMapScale& h = r.heat;
+    std::string fixed;
+    if (h.fixed)
+      fixed = fmt::format(" (--heatmap-max; the image's largest {:.0f}, {} pixel{} above the scale)", h.imageMax,
+                          h.pixelsAbove, h.pixelsAbove == 1 ? "" : "s");
+    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {:.0f}{}\n", r.heatmap, h.max, fixed);
   }
 }
 
@@ -142,6 +144,10 @@ nlohmann::json renderStats(const RenderReport& r, const RunInfo& run) {
   j["mrays_per_second"] = mraysPerSecond(double(res.primaryRays + res.secondaryRays), res.seconds);
   j["steps_per_camera_ray"] = meanCameraSteps(res);
   j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
+  if (!r.heatmap.empty())
+    j["heatmap"] = {{"file", r.heatmap},        {"scale", "log"},
+                    {"scale_max", r.heat.max},  {"fixed", r.heat.fixed},
+                    {"image_max", r.heat.imageMax}, {"pixels_above", r.heat.pixelsAbove}};
   return j;
 }
 
