@@ -188,7 +188,8 @@ def run(ctx):
         axes[3].plot([r["lod"] for r in pts], [r["error_mean_small"] for r in pts], "s--",
                      label=f"{C.short(s)}: {swh} (16× texels per pixel)")
     axes[0].set_xlabel("primary render time / time at λ = 0 (1 thread, median)")
-    axes[0].set_ylabel(f"per-pixel error vs {ref_spp}-spp λ=0 reference")
+    # The metric: each pixel's mean absolute difference over RGB (L1), then the mean or max over pixels.
+    axes[0].set_ylabel(f"per-pixel L1 error (mean over RGB of |img − ref|)\nvs {ref_spp}-spp λ=0 reference")
     axes[0].set_yscale("log")
     axes[0].set_title("image error against run time (labels: λ; stars: --lod cone)")
     axes[1].set_xlabel("λ")
@@ -200,14 +201,14 @@ def run(ctx):
     axes[2].set_yscale("log")
     axes[2].set_title("memory against λ")
     axes[3].set_xlabel("λ")
-    axes[3].set_ylabel(f"mean per-pixel error vs {ref_spp}-spp λ=0 reference")
+    axes[3].set_ylabel(f"mean per-pixel L1 error (mean over RGB of |img − ref|)\nvs {ref_spp}-spp λ=0 reference")
     axes[3].set_yscale("log")
     axes[3].set_title("1-spp primary image error against λ, two image sizes")
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=6.5)
     fig.tight_layout()
-    fig.savefig(ctx.out / "lod.png")
+    fig.savefig(ctx.out / "lod.png", bbox_inches="tight")
 
     header = ["scene", "λ", "primary s", "× λ=0", "path s", "× λ=0", "steps/camera ray", "range query",
               "mean error", "max error", f"mean error {swh}", "oracle mismatches"]

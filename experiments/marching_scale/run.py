@@ -101,14 +101,14 @@ def run(ctx):
             a.set_xlabel("marching scale (texels)")
             a.grid(True, which="both", alpha=0.3)
         ax.set_ylabel("render time / best RMIP-normal time")
-        ax.set_title(f"{s}, camera rays {size}, 1 thread (median, range; circle = best)")
+        ax.set_title(f"{s}: camera rays {size}, 1 thread\n(median and range over rounds; circle = best)")
         ax.legend(fontsize=6.5)
         axes[1][j].set_yscale("log")
         axes[1][j].set_ylabel("per camera ray: boxes (dashed), cells marched (solid)")
         axes[1][j].set_title(f"{s}: work per ray (exact counts)")
         axes[1][j].legend(fontsize=6.5)
     fig.tight_layout()
-    fig.savefig(ctx.out / "marching_scale.png")
+    fig.savefig(ctx.out / "marching_scale.png", bbox_inches="tight")
 
     header = (["scene", "curve", "memory vs TFDM"] + [f"scale {k}" for k in scales]
               + ["best scale", "steps/camera ray at best"])
