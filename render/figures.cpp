@@ -72,7 +72,7 @@ FalseColourResult writeFalseColour(const std::vector<float>& values, int W, int 
   // The bar's proportions follow the width, so a thumbnail and a full frame both read.
   const int fs = std::clamp(W / 28, 9, 18);  // font size, pixels
   const int gap = std::max(2, fs / 4), strip = std::max(6, fs), tickLen = std::max(2, fs / 4);
-  const int barH = gap + strip + tickLen + 2 * (fs + gap) + gap;
+  const int barH = gap + strip + tickLen + 2 * (fs + gap) + fs / 2;  // the caption's descenders too
   Image img(W, H + barH);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {

@@ -103,8 +103,17 @@ def run(ctx):
 
     w, h = map(int, size.split("x"))
     n = len(METHODS) + 1
-    fig, axes = plt.subplots(2, n, figsize=(2.6 * n, 2.6 * 2 * h / w + 1.3), squeeze=False,
-                             gridspec_kw={"hspace": 0.32, "wspace": 0.05})
+    # Sizes in inches: the figure's height follows the images' so that the rows sit close.
+    width = 2.4 * n + 0.7
+    left, right, top, bottom, hspace, wspace = 0.01, 0.94, 0.86, 0.01, 0.3, 0.05
+    img_w = width * (right - left) / (n + 0.06 + wspace * n)
+    img_h = img_w * h / w
+    fig = plt.figure(figsize=(width, img_h * (2 + hspace) / (top - bottom)))
+    # One column more for the error images' colour bar, so every image has the same size.
+    gs = fig.add_gridspec(2, n + 1, width_ratios=[1] * n + [0.06], hspace=hspace, wspace=wspace, left=left,
+                          right=right, top=top, bottom=bottom)
+    axes = np.array([[fig.add_subplot(gs[i, j]) for j in range(n)] for i in range(2)])
+    cax = fig.add_subplot(gs[1, n])
 
     def show(img):
         return np.clip(img, 0, 1) ** (1 / 2.2)  # linear to display (sRGB-like gamma)
@@ -129,10 +138,10 @@ def run(ctx):
     for a in axes.ravel():
         a.set_xticks([])
         a.set_yticks([])
-    cb = fig.colorbar(im, ax=list(axes[1]), fraction=0.025, pad=0.01)
+    cb = fig.colorbar(im, cax=cax)
     cb.set_label("relative squared error", fontsize=7)
     fig.suptitle(f"{scene_name}, {size}, path traced, equal time: each method gets the canonical configuration's "
-                 f"time at {budget_spp} spp ({budget:.2f} s, 1 thread)", fontsize=9)
+                 f"time at {budget_spp} spp ({budget:.2f} s, 1 thread)", fontsize=9, y=0.995)
     fig.savefig(ctx.out / "methods_figure.png", dpi=100, bbox_inches="tight")
 
     header = ["method", "spp", "render s", "relMSE", "PSNR", "steps/camera ray", "memory"]

@@ -91,9 +91,9 @@ def run(ctx):
     shown = ["tfdm", "canonical"]
     cmap = plt.get_cmap("viridis").copy()
     cmap.set_bad("black")
-    height = 2.75 * len(scenes) + 0.6
+    height = 2.6 * len(scenes) + 0.6
     fig, axes = plt.subplots(len(scenes), 5, figsize=(10.5, height), squeeze=False,
-                             gridspec_kw={"width_ratios": [1, 1, 0.04, 0.3, 0.8], "wspace": 0.12, "hspace": 0.55})
+                             gridspec_kw={"width_ratios": [1, 1, 0.04, 0.3, 0.8], "wspace": 0.12, "hspace": 0.4})
     # The suptitle sits just above the first row, not a fixed fraction of a tall figure away.
     fig.subplots_adjust(top=1 - 0.75 / height, bottom=0.35 / height)
     for i in range(len(scenes)):
