@@ -116,10 +116,13 @@ FalseColourResult writeFalseColour(const std::vector<float>& values, int W, int 
     }
     lastRight = left + w;
   }
-  if (labelled && !scale.caption.empty())
-    labelled = OIIO::ImageBufAlgo::render_text(text, W / 2, yTick + tickLen + fs + 2 * gap, scale.caption, fs, kFont,
+  for (const std::string& caption : scale.captions) {
+    if (!labelled || OIIO::ImageBufAlgo::text_size(caption, fs, kFont).width() > W - 2) continue;
+    labelled = OIIO::ImageBufAlgo::render_text(text, W / 2, yTick + tickLen + fs + 2 * gap, caption, fs, kFont,
                                                0.85f, OIIO::ImageBufAlgo::TextAlignX::Center,
                                                OIIO::ImageBufAlgo::TextAlignY::Top);
+    break;
+  }
   if (!labelled) OIIO::geterror();  // cleared: the caller warns
   for (int y = 0; y < barH; ++y)
     for (int x = 0; x < W; ++x) {
@@ -144,7 +147,7 @@ FalseColourResult writeHeatMap(const AOVs& aov, const std::string& path, const H
   ColourScale cs;
   cs.kind = ColourScale::Kind::Steps;
   cs.max = scale.max;
-  cs.caption = "traversal steps per camera ray, log scale";
+  cs.captions = {"traversal steps per camera ray, log scale", "steps per camera ray, log", "steps, log"};
   return writeFalseColour(aov.steps, aov.color.width, aov.color.height, cs, path);
 }
 

@@ -17,7 +17,9 @@ struct ColourScale {
   enum class Kind { Steps, Decades } kind = Kind::Steps;
   float max = 1.0f;
   int decades = 3;
-  std::string caption;  // under the bar: what the values are, with their unit
+  // Under the bar: what the values are, with their unit; the first that fits the width
+  // (longest first), none when none does.
+  std::vector<std::string> captions;
   float position(float v) const;  // 0 .. 1 along the bar
 };
 

@@ -322,7 +322,8 @@ int runCompare(const std::string& a, const std::string& b, const std::string& ou
   scale.kind = ColourScale::Kind::Decades;
   scale.decades = 3;
   scale.max = maxGiven ? max : std::max(c.maxPerPixel, 1e-12f);
-  scale.caption = "relative squared error (a-b)^2/(b^2+0.01), log scale";
+  scale.captions = {"relative squared error (a-b)^2/(b^2+0.01), log scale", "relative squared error, log scale",
+                    "rel. sq. error, log"};
   int64_t above = 0;
   for (float v : c.perPixel) above += v > scale.max;
   FalseColourResult written;
