@@ -171,8 +171,12 @@ RGB readRGB(const std::string& path) {
   const OIIO::ImageSpec spec = in->spec();
   const int C = spec.nchannels;
   if (spec.width <= 0 || spec.height <= 0 || C <= 0) fail(path, "the image has no pixels");
+  // A header may claim any size: refused before the allocation (render's limit, 2^26 pixels).
+  if (int64_t(spec.width) * spec.height > (int64_t(1) << 26) || C > 64)
+    fail(path, "is {}x{} with {} channels: more than 2^26 pixels or 64 channels", spec.width, spec.height, C);
   std::vector<float> all(size_t(spec.width) * spec.height * C);
-  if (!in->read_image(0, 0, 0, C, OIIO::TypeDesc::FLOAT, all.data())) fail(path, "cannot read the image ({})", in->geterror());
+  if (!in->read_image(0, 0, 0, C, OIIO::TypeDesc::FLOAT, all.data()))
+    fail(path, "cannot read the image ({})", in->geterror());
   in->close();
   const bool srgb = OIIO::Strutil::iequals(spec.get_string_attribute("oiio:ColorSpace"), "sRGB");
   RGB img;
@@ -193,8 +197,8 @@ RGB readRGB(const std::string& path) {
 Comparison compareImages(const std::string& a, const std::string& reference) {
   const RGB A = readRGB(a), B = readRGB(reference);
   if (A.width != B.width || A.height != B.height)
-    fail(a, "is {}x{}, the reference {} is {}x{}: images of one size compare", A.width, A.height, reference, B.width,
-         B.height);
+    fail(a, "is {}x{}, the reference {} is {}x{}: only images of the same size compare", A.width, A.height,
+         reference, B.width, B.height);
   Comparison r;
   r.width = A.width, r.height = A.height;
   const size_t n = size_t(A.width) * A.height;

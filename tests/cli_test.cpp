@@ -892,6 +892,8 @@ TEST_CASE("oblong compare prints relMSE and PSNR, writes an error image and refu
   CHECK(m.out.empty());
   oneLine(run("compare " + path("missing.exr") + " " + path("ref.exr")), path("missing.exr") + ": cannot read");
   oneLine(run("compare " + path("img.exr") + " " + path("ref.exr") + " -o " + path("e2.png") + " --max 0"), "--max");
-  oneLine(run("compare " + path("img.exr") + " " + path("ref.exr") + " -o " + path("ref.exr")), "names an input of this command");
+  oneLine(run("compare " + path("img.exr") + " " + path("ref.exr") + " -o " + path("ref.exr")),
+          "names an input of this command");
+  oneLine(run("compare " + path("img.exr") + " " + path("ref.exr") + " --max 1"), "--max: applies to the error image");
   CHECK(!std::filesystem::exists(path("e2.png")));
 }

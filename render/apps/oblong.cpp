@@ -356,7 +356,7 @@ int runCompare(const std::string& a, const std::string& b, const std::string& ou
     fmt::print("oblong compare: {} against the reference {}, {}x{}\n", a, b, c.width, c.height);
     fmt::print("  relMSE   : {:.6g} (mean over pixels and RGB of (a-b)^2/(b^2+0.01), linear values)\n", c.relMSE);
     fmt::print("  PSNR     : {} (10 log10(1/MSE), peak 1; MSE {:.6g})\n",
-               std::isfinite(c.psnr) ? fmt::format("{:.2f} dB", c.psnr) : std::string("inf (identical)"), c.mse);
+               std::isfinite(c.psnr) ? fmt::format("{:.2f} dB", c.psnr) : std::string("inf, identical images"), c.mse);
     if (!out.empty() && data)
       fmt::print("  error    : {}, each pixel's relative squared error (mean over RGB), grey\n", out);
     else if (!out.empty())
@@ -504,7 +504,8 @@ int main(int argc, char** argv) {
   for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
     known = known || (argc > 1 && sub->get_name() == argv[1]);
   if (argc > 1 && argv[1][0] != '-' && !known) {
-    eprint("oblong: command line: unknown command '{}' (render, trace, info, bake, export or compare; oblong --help lists them)\n",
+    eprint("oblong: command line: unknown command '{}' (render, trace, info, bake, export or compare; oblong --help "
+           "lists them)\n",
            argv[1]);
     return 1;
   }
