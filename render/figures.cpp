@@ -89,7 +89,7 @@ FalseColourResult writeFalseColour(const std::vector<float>& values, int W, int 
   const int yTick = gap + strip;
   const std::vector<Tick> tk = ticks(scale);
   bool labelled = true;
-  int lastRight = -1 << 20;
+  int lastRight = std::numeric_limits<int>::min() / 2;
   const int rightEdge = W - 1;
   const int lastWidth = OIIO::ImageBufAlgo::text_size(tk.back().text, fs, kFont).width();
   OIIO::geterror();  // a missing font is reported through the return values below
