@@ -31,9 +31,11 @@ vec3 linear(vec3 display) { return glm::pow(display, vec3(2.2f)); }
 
 constexpr const char* kFont = "DejaVuSans";
 
-// A number as short as it reads on a bar: integers for steps, two digits otherwise.
+// A number as short as it reads on a bar: steps (means over samples: one decimal where not
+// whole), errors with two digits.
 std::string label(float v, ColourScale::Kind kind) {
-  if (kind == ColourScale::Kind::Steps) return fmt::format("{:.0f}", v);
+  if (kind == ColourScale::Kind::Steps)
+    return v == std::round(v) ? fmt::format("{:.0f}", v) : fmt::format("{:.1f}", v);
   return fmt::format("{:.2g}", v);
 }
 

@@ -9,6 +9,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace oblong {
 
@@ -116,11 +117,14 @@ void printRenderSummary(const RenderReport& r) {
                int64_t(o.size.x) * o.size.y);
   if (!r.heatmap.empty()) {
     const HeatMapScale& h = r.heat;
+    // As the bar numbers them: steps are means over the samples.
+    auto steps = [](float v) { return v == std::round(v) ? fmt::format("{:.0f}", v) : fmt::format("{:.1f}", v); };
     std::string fixed;
     if (h.fixed)
-      fixed = fmt::format(" (--heatmap-max; the image's largest {:.0f}, {} pixel{} above the scale)", h.imageMax,
+      fixed = fmt::format(" (--heatmap-max; the image's largest {}, {} pixel{} above the scale)", steps(h.imageMax),
                           h.pixelsAbove, h.pixelsAbove == 1 ? "" : "s");
-    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {:.0f}{}\n", r.heatmap, h.max, fixed);
+    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {}{}\n", r.heatmap, steps(h.max),
+               fixed);
   }
 }
 
