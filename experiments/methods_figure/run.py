@@ -81,17 +81,23 @@ def run(ctx):
     ctx.log("seconds per spp: " + ", ".join(f"{k} {v:.3f}" for k, v in per_spp.items()) +
             f"; budget {budget:.2f} s; spp " + ", ".join(f"{k} {v}" for k, v in spp.items()))
 
+    # The final renders, interleaved too: the time a panel gives is the median over the rounds
+    # (the image is the same in every round: the same seed).
+    final = C.interleaved(ctx, [(key, "render", scene, ["--size", size, "--spp", spp[key], "-o",
+                                                        ctx.tmp(f"{key}.pfm")] + flags)
+                                for key, _, flags in METHODS], ctx.reps(2, 1), seed=2)
     rows, images, errors = [], {}, {}
     for key, label, flags in METHODS:
         img = ctx.tmp(f"{key}.pfm")
-        run_ = C.run_oblong(ctx, "render", scene, ["--size", size, "--spp", spp[key], "-o", img] + flags,
-                            label=key)
+        run_ = final[key][0]
         err = ctx.tmp(f"{key}_error.pfm")
         c = compare(ctx, img, ref, err)
         images[key] = read_pfm(img)
         errors[key] = read_pfm(err)[:, :, 0]
         rows.append({"method": key, "label": label, "spp": spp[key], "seconds_per_spp_pilot": per_spp[key],
-                     "seconds": run_.seconds, "budget_s": budget, "relmse": c["relmse"], "mse": c["mse"],
+                     "seconds": C.med([x.seconds for x in final[key]]),
+                     "seconds_min": min(x.seconds for x in final[key]),
+                     "seconds_max": max(x.seconds for x in final[key]), "budget_s": budget, "relmse": c["relmse"], "mse": c["mse"],
                      "psnr_db": c["psnr_db"] if isinstance(c["psnr_db"], float) else float("inf"),
                      "steps_per_camera_ray": run_.stats["steps_per_camera_ray"],
                      "memory_bytes": C.total_bytes(run_.stats)})
@@ -105,7 +111,7 @@ def run(ctx):
     n = len(METHODS) + 1
     # Sizes in inches: the figure's height follows the images' so that the rows sit close.
     width = 2.4 * n + 0.7
-    left, right, top, bottom, hspace, wspace = 0.01, 0.94, 0.86, 0.01, 0.3, 0.05
+    left, right, top, bottom, hspace, wspace = 0.01, 0.94, 0.82, 0.01, 0.3, 0.05
     img_w = width * (right - left) / (n + 0.06 + wspace * n)
     img_h = img_w * h / w
     fig = plt.figure(figsize=(width, img_h * (2 + hspace) / (top - bottom)))
@@ -140,8 +146,11 @@ def run(ctx):
         a.set_yticks([])
     cb = fig.colorbar(im, cax=cax)
     cb.set_label("relative squared error", fontsize=7)
+    rounds = len(final["canonical"])
     fig.suptitle(f"{scene_name}, {size}, path traced, equal time: each method gets the canonical configuration's "
-                 f"time at {budget_spp} spp ({budget:.2f} s, 1 thread)", fontsize=9, y=0.995)
+                 f"time at {budget_spp} spp ({budget:.2f} s, 1 thread);\nthe spp from a pilot render, the times "
+                 f"shown: median over {rounds} round{'s' if rounds > 1 else ''} of the final render",
+                 fontsize=9, y=0.995)
     fig.savefig(ctx.out / "methods_figure.png", dpi=100, bbox_inches="tight")
 
     header = ["method", "spp", "render s", "relMSE", "PSNR", "steps/camera ray", "memory"]
