@@ -354,36 +354,4 @@ void writeAOVs(const AOVs& aov, const std::string& path) {
   });
 }
 
-namespace {
-// A compact perceptual colour map (viridis-like, 5 stops, linear in between).
-vec3 colormap(float t) {
-  static const vec3 stops[] = {{0.267f, 0.005f, 0.329f}, {0.229f, 0.322f, 0.546f}, {0.128f, 0.567f, 0.551f},
-                               {0.369f, 0.789f, 0.383f}, {0.993f, 0.906f, 0.144f}};
-  t = std::clamp(t, 0.0f, 1.0f) * 4.0f;
-  const int i = std::min(3, int(t));
-  return glm::mix(stops[i], stops[i + 1], t - float(i));
-}
-}  // namespace
-
-void writeHeatMap(const AOVs& aov, const std::string& path, float maxSteps) {
-  const int W = aov.color.width, H = aov.color.height;
-  float mx = maxSteps;
-  if (mx <= 0)
-    for (float s : aov.steps) mx = std::max(mx, s);
-  mx = std::max(mx, 1.0f);
-  const int bar = std::max(4, H / 40);  // colour bar at the bottom, log scale 1 .. mx
-  Image img(W, H + bar);
-  const float denom = std::log1p(mx);
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const float s = aov.steps[size_t(y) * W + x];
-      // Linear values: writeImage sRGB-encodes PNGs, so undo that for the colour map.
-      const vec3 c = s <= 0 ? vec3(0.0f) : colormap(std::log1p(s) / denom);
-      img.at(x, y) = glm::pow(c, vec3(2.2f));
-    }
-  for (int y = H; y < H + bar; ++y)
-    for (int x = 0; x < W; ++x) img.at(x, y) = glm::pow(colormap(float(x) / float(std::max(1, W - 1))), vec3(2.2f));
-  writeImage(img, path);
-}
-
 }  // namespace oblong

@@ -125,8 +125,6 @@ void checkBandsFit(const RenderOptions& opts);
 
 // Colour, depth, normal and the per-pixel counters as one multi-channel EXR.
 void writeAOVs(const AOVs& aov, const std::string& path);
-// False-colour, log-scale heat map of steps per pixel (RMIP paper Fig. 9), with a
-// colour bar; maxSteps <= 0: the image's own maximum.
-void writeHeatMap(const AOVs& aov, const std::string& path, float maxSteps = 0.0f);
+// The heat map of steps per pixel is render/figures.h's writeHeatMap.
 
 }  // namespace oblong

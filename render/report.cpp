@@ -9,6 +9,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace oblong {
 
@@ -115,10 +116,15 @@ void printRenderSummary(const RenderReport& r) {
     fmt::print("  partial  : interrupted; {} of {} pixels rendered (the rest is black)\n", res.pixelsDone,
                int64_t(o.size.x) * o.size.y);
   if (!r.heatmap.empty()) {
-    float maxSteps = 0;
-    for (float st : res.aov.steps) maxSteps = std::max(maxSteps, st);
-    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {:.0f}\n", r.heatmap,
-               std::max(1.0f, maxSteps));
+    const HeatMapScale& h = r.heat;
+    // As the bar numbers them: steps are means over the samples.
+    auto steps = [](float v) { return v == std::round(v) ? fmt::format("{:.0f}", v) : fmt::format("{:.1f}", v); };
+    std::string fixed;
+    if (h.fixed)
+      fixed = fmt::format(" (--heatmap-max; the image's largest {}, {} pixel{} above the scale)", steps(h.imageMax),
+                          h.pixelsAbove, h.pixelsAbove == 1 ? "" : "s");
+    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {}{}\n", r.heatmap, steps(h.max),
+               fixed);
   }
 }
 
@@ -142,6 +148,10 @@ nlohmann::json renderStats(const RenderReport& r, const RunInfo& run) {
   j["mrays_per_second"] = mraysPerSecond(double(res.primaryRays + res.secondaryRays), res.seconds);
   j["steps_per_camera_ray"] = meanCameraSteps(res);
   j["ray_counters"] = countersJson(res.counters, res.primaryRays + res.secondaryRays);
+  if (!r.heatmap.empty())
+    j["heatmap"] = {{"file", r.heatmap},        {"scale", "log"},
+                    {"scale_max", r.heat.max},  {"fixed", r.heat.fixed},
+                    {"image_max", r.heat.imageMax}, {"pixels_above", r.heat.pixelsAbove}};
   return j;
 }
 

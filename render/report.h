@@ -10,6 +10,7 @@
 
 #include "core/scene.h"
 #include "render/embree_scene.h"
+#include "render/figures.h"
 #include "render/renderer.h"
 #include "render/trace_backend.h"
 
@@ -45,6 +46,7 @@ struct RenderReport {
   const RenderResult& res;
   std::string out, heatmap;
   bool defaultOut = false;  // -o not given
+  HeatMapScale heat;        // the heat map's colour scale (with a heat map)
 };
 // The configuration built, its memory, the summary line, the partial and heat-map lines.
 void printRenderSummary(const RenderReport& r);

@@ -21,12 +21,13 @@ if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
 
 # The compiler, the build tools and every library CMake requires to build the `oblong`
 # program (CMakeLists.txt's find_package calls before the tests'); glmark2-data holds the
-# asteroid of the README's first render (scenes/asteroid.json).
+# asteroid of the README's first render (scenes/asteroid.json); fonts-dejavu-core the
+# font of the numbers on heat maps' and error images' colour bars (docs/render.md).
 PKGS=(
   build-essential cmake ninja-build pkg-config
   libglm-dev libembree-dev libopenimageio-dev libceres-dev
   libfmt-dev libassimp-dev nlohmann-json3-dev libcli11-dev libtbb-dev
-  glmark2-data
+  glmark2-data fonts-dejavu-core
 )
 
 if [ "$minimal" = 0 ]; then

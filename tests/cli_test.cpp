@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <cctype>
 #include <cstdint>
 #include <cstdlib>
@@ -626,7 +628,7 @@ TEST_CASE("the README's usage block lists every option --help lists, and no othe
   };
   // The top level: --version has its line, every command has its entry.
   CHECK(usage("--version").size() > 0);
-  for (const char* sub : {"render", "trace", "info", "bake", "export"}) {
+  for (const char* sub : {"render", "trace", "info", "bake", "export", "compare"}) {
     INFO("oblong " << sub);
     const std::string text = usage(sub);
     REQUIRE(!text.empty());
@@ -723,4 +725,180 @@ TEST_CASE("oblong export writes a PLY and refuses what it cannot write with one 
   const Run mem = run("export " + scene + " -o /dev/null");
   ::unsetenv("OBLONG_MEMORY_LIMIT");
   oneLine(mem, {scene + ": writing the export through to /dev/null needs ", "OBLONG_MEMORY_LIMIT"});
+}
+
+namespace {
+
+// An image's pixels as 8-bit RGB (what a viewer shows), row-major.
+struct Pixels {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgb;
+  std::array<uint8_t, 3> at(int x, int y) const {
+    const size_t i = (size_t(y) * width + x) * 3;
+    return {rgb[i], rgb[i + 1], rgb[i + 2]};
+  }
+};
+
+Pixels readPixels(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  REQUIRE(in);
+  Pixels p;
+  p.width = in->spec().width, p.height = in->spec().height;
+  p.rgb.resize(size_t(p.width) * p.height * 3);
+  REQUIRE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, p.rgb.data()));
+  return p;
+}
+
+std::vector<float> readChannel(const std::string& exr, int channel) {
+  auto in = OIIO::ImageInput::open(exr);
+  REQUIRE(in);
+  const OIIO::ImageSpec spec = in->spec();
+  std::vector<float> v(size_t(spec.width) * spec.height);
+  REQUIRE(in->read_image(0, 0, channel, channel + 1, OIIO::TypeDesc::FLOAT, v.data()));
+  return v;
+}
+
+// The colour bar's text rows (below the gradient strip) hold numbers: bright glyph pixels
+// on the black background, not one uniform colour.
+void checkBarHasText(const Pixels& p, int mapHeight) {
+  int bright = 0, black = 0;
+  const int strip = std::max(6, std::clamp(p.width / 28, 9, 18));
+  for (int y = mapHeight + strip + 4; y < p.height; ++y)
+    for (int x = 0; x < p.width; ++x) {
+      const auto c = p.at(x, y);
+      bright += c[0] > 200 && c[1] > 200 && c[2] > 200;
+      black += c[0] == 0 && c[1] == 0 && c[2] == 0;
+    }
+  CHECK(bright > 20);
+  CHECK(black > p.width);
+}
+
+}  // namespace
+
+TEST_CASE("oblong render --heatmap-max fixes the heat map's scale; the colour bar is numbered", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_heatmap_max");
+  auto path = [&](const std::string& n) { return (dir / n).string(); };
+  const std::string common = " --size 96x64 --threads 2 --integrator primary -q";
+  // Two runs with different work per pixel, both on the scale 0 .. 400.
+  const Run a = run("render" + common + " -o " + path("a.png") + " --aovs " + path("a.exr") + " --heatmap " +
+                    path("ha.png") + " --heatmap-max 400");
+  const Run b = run("render" + common + " --marching-scale 1 -o " + path("b.png") + " --aovs " + path("b.exr") +
+                    " --heatmap " + path("hb.png") + " --heatmap-max 400 --stats " + path("b.json"));
+  const Run own = run("render" + common + " -o " + path("c.png") + " --heatmap " + path("hc.png"));
+  INFO(a.err << b.err << own.err);
+  REQUIRE(a.status == 0);
+  REQUIRE(b.status == 0);
+  REQUIRE(own.status == 0);
+  CHECK(a.err.empty());
+  const std::vector<float> sa = readChannel(path("a.exr"), 7), sb = readChannel(path("b.exr"), 7);
+  REQUIRE(readChannel(path("a.exr"), 7).size() == 96 * 64);
+  const Pixels ha = readPixels(path("ha.png")), hb = readPixels(path("hb.png")), hc = readPixels(path("hc.png"));
+  REQUIRE(ha.width == 96);
+  REQUIRE(ha.height > 64);
+  CHECK(ha.height == hb.height);
+  // The same step count has the same colour in both maps, whatever else differs.
+  std::map<int, std::array<uint8_t, 3>> colour;
+  for (int i = 0; i < 96 * 64; ++i) colour[int(sa[i])] = ha.at(i % 96, i / 96);
+  int shared = 0, differ = 0;
+  float maxA = 0;
+  for (int i = 0; i < 96 * 64; ++i) {
+    maxA = std::max(maxA, sa[i]);
+    const auto it = colour.find(int(sb[i]));
+    if (it == colour.end()) continue;
+    ++shared;
+    CHECK(it->second == hb.at(i % 96, i / 96));
+  }
+  CHECK(shared > 96 * 64 / 2);
+  // Scaled to its own maximum (< 400), the same run's map is brighter where it took steps.
+  REQUIRE(maxA < 400);
+  for (int i = 0; i < 96 * 64; ++i)
+    if (sa[i] > 0) differ += ha.at(i % 96, i / 96) != hc.at(i % 96, i / 96);
+  CHECK(differ > 0);
+  // No step is black; the top of the scale is the bar's last colour.
+  for (int i = 0; i < 96 * 64; ++i)
+    if (sa[i] == 0) CHECK(ha.at(i % 96, i / 96) == (std::array<uint8_t, 3>{0, 0, 0}));
+  checkBarHasText(ha, 64);
+  checkBarHasText(hc, 64);
+  // The scale used is recorded.
+  const auto j = nlohmann::json::parse(std::ifstream(path("b.json")));
+  CHECK(j.at("heatmap").at("scale_max") == 400);
+  CHECK(j.at("heatmap").at("fixed") == true);
+  CHECK(j.at("heatmap").at("image_max").get<float>() > 0);
+  const Run shown = run("render --size 32x24 --threads 1 --integrator primary -o " + path("d.png") + " --heatmap " +
+                        path("hd.png") + " --heatmap-max 7");
+  INFO(shown.out);
+  CHECK_THAT(shown.out, Catch::Contains("colour bar 0 .. 7 (--heatmap-max; the image's largest"));
+  // Refused before any work, one line each.
+  for (const std::string& bad : {std::string(" --heatmap-max 10"), " --heatmap " + path("he.png") + " --heatmap-max 0",
+                                 " --heatmap " + path("he.png") + " --heatmap-max -3"}) {
+    const Run r = run("render --size 8x8 -o " + path("e.png") + bad);
+    INFO(bad << ": " << r.err);
+    CHECK(r.status == 1);
+    CHECK(lines(r.err) == 1);
+    CHECK_THAT(r.err, Catch::StartsWith("oblong: --heatmap-max: "));
+  }
+}
+
+TEST_CASE("oblong compare prints relMSE and PSNR, writes an error image and refuses mismatched sizes", "[cli]") {
+  const auto dir = oblong::test::scratchDir("cli_compare");
+  auto path = [&](const std::string& n) { return (dir / n).string(); };
+  // Grey 2x2 images: the reference 0.5 everywhere, the image off by 0, 0.1, -0.1 and 0.3.
+  oblong::test::writeGray(path("ref.exr"), 2, 2, {0.5f, 0.5f, 0.5f, 0.5f}, OIIO::TypeDesc::FLOAT);
+  oblong::test::writeGray(path("img.exr"), 2, 2, {0.5f, 0.6f, 0.4f, 0.8f}, OIIO::TypeDesc::FLOAT);
+  oblong::test::writeGray(path("wide.exr"), 3, 2, std::vector<float>(6, 0.5f), OIIO::TypeDesc::FLOAT);
+  // relMSE = (0 + 0.01 + 0.01 + 0.09) / 4 / (0.25 + 0.01) = 0.105769...; MSE = 0.11 / 4 = 0.0275,
+  // PSNR = 10 log10(1 / 0.0275) = 15.6067 dB.
+  const Run j = run("compare " + path("img.exr") + " " + path("ref.exr") + " --json -o " + path("err.exr"));
+  INFO(j.out << j.err);
+  REQUIRE(j.status == 0);
+  CHECK(j.err.empty());
+  const auto k = nlohmann::json::parse(j.out);
+  CHECK(k.at("relmse").get<double>() == Approx(0.11 / 4 / 0.26).epsilon(1e-5));
+  CHECK(k.at("mse").get<double>() == Approx(0.0275).epsilon(1e-5));
+  CHECK(k.at("psnr_db").get<double>() == Approx(15.6067).epsilon(1e-4));
+  CHECK(k.at("width") == 2);
+  // The float error image holds each pixel's relative squared error.
+  const std::vector<float> e = readChannel(path("err.exr"), 0);
+  REQUIRE(e.size() == 4);
+  CHECK(e[0] == 0.0f);
+  CHECK(e[1] == Approx(0.01 / 0.26).epsilon(1e-4));
+  CHECK(e[3] == Approx(0.09 / 0.26).epsilon(1e-4));
+  // The text summary states the definitions; identical images have an infinite PSNR.
+  const Run t = run("compare " + path("img.exr") + " " + path("img.exr"));
+  INFO(t.out);
+  REQUIRE(t.status == 0);
+  CHECK_THAT(t.out, Catch::Contains("relMSE   : 0 (mean over pixels and RGB of (a-b)^2/(b^2+0.01)"));
+  CHECK_THAT(t.out, Catch::Contains("PSNR     : inf"));
+  // A false-colour error image with a numbered bar; --max fixes its scale.
+  const std::string big = path("big.exr"), bigRef = path("bigref.exr");
+  std::vector<float> v(128 * 32), r(128 * 32, 0.5f);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = 0.5f + 0.3f * float(i % 128) / 127.0f;
+  oblong::test::writeGray(big, 128, 32, v, OIIO::TypeDesc::FLOAT);
+  oblong::test::writeGray(bigRef, 128, 32, r, OIIO::TypeDesc::FLOAT);
+  const Run png = run("compare " + big + " " + bigRef + " -o " + path("err.png") + " --max 1");
+  INFO(png.out << png.err);
+  REQUIRE(png.status == 0);
+  CHECK_THAT(png.out, Catch::Contains("colour bar 0.001 .. 1 (--max;"));
+  const Pixels p = readPixels(path("err.png"));
+  CHECK(p.width == 128);
+  CHECK(p.height > 32);
+  CHECK(p.at(0, 10) == (std::array<uint8_t, 3>{0, 0, 0}));  // no error: black
+  CHECK(p.at(127, 10) != p.at(64, 10));
+  checkBarHasText(p, 32);
+  // Mismatched sizes, a missing file, a bad --max: one line naming the problem, exit 1.
+  auto oneLine = [](const Run& x, const std::string& what) {
+    INFO(x.out << x.err);
+    CHECK(x.status == 1);
+    CHECK(lines(x.err) == 1);
+    CHECK_THAT(x.err, Catch::StartsWith("oblong: ") && Catch::Contains(what));
+  };
+  const Run m = run("compare " + path("wide.exr") + " " + path("ref.exr"));
+  oneLine(m, path("wide.exr") + ": is 3x2, the reference " + path("ref.exr") + " is 2x2");
+  CHECK(m.out.empty());
+  oneLine(run("compare " + path("missing.exr") + " " + path("ref.exr")), path("missing.exr") + ": cannot read");
+  oneLine(run("compare " + path("img.exr") + " " + path("ref.exr") + " -o " + path("e2.png") + " --max 0"), "--max");
+  oneLine(run("compare " + path("img.exr") + " " + path("ref.exr") + " -o " + path("ref.exr")),
+          "names an input of this command");
+  oneLine(run("compare " + path("img.exr") + " " + path("ref.exr") + " --max 1"), "--max: applies to the error image");
+  CHECK(!std::filesystem::exists(path("e2.png")));
 }

@@ -3,6 +3,7 @@
 #include "core/procedural.h"
 #include "render/camera.h"
 #include "render/embree_scene.h"
+#include "render/figures.h"
 #include "render/renderer.h"
 #include "test_util.h"
 
@@ -68,7 +69,7 @@ TEST_CASE("render: AOVs go to one multi-channel EXR, steps to a heat map", "[ren
   const auto dir = test::scratchDir("render");
   const std::string exr = (dir / "aovs.exr").string(), png = (dir / "steps.png").string();
   writeAOVs(r.aov, exr);
-  writeHeatMap(r.aov, png);
+  writeHeatMap(r.aov, png, heatMapScale(r.aov));
   auto in = OIIO::ImageInput::open(exr);
   REQUIRE(in);
   const OIIO::ImageSpec& spec = in->spec();

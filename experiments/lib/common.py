@@ -497,6 +497,36 @@ def write_csv(path: Path, rows: list, fields: list | None = None) -> None:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items() if k in fields})
 
 
+def read_csv(path: Path) -> list:
+    """The rows write_csv wrote, with numbers and booleans as such ('' is None)."""
+    def value(v: str):
+        if v == "":
+            return None
+        if v in ("True", "False"):
+            return v == "True"
+        for t in (int, float):
+            try:
+                return t(v)
+            except ValueError:
+                pass
+        return v
+    with open(path, newline="") as f:
+        return [{k: value(v) for k, v in r.items()} for r in csv.DictReader(f)]
+
+
+def replot(module) -> int:
+    """`run.py --replot [--out DIR]`: the experiment's plot again from DIR/results.csv (default:
+    the committed results), without running anything: for a change of the plot alone."""
+    ap = argparse.ArgumentParser(description=f"{module.NAME}: redraw the plot from results.csv")
+    ap.add_argument("--replot", action="store_true")
+    ap.add_argument("--out", default=str(EXPERIMENTS / module.NAME))
+    a = ap.parse_args()
+    out = Path(a.out)
+    module.plot(read_csv(out / "results.csv"), out)
+    print(f"{module.NAME}: redrew the plot in {out} from results.csv")
+    return 0
+
+
 def plt():
     import matplotlib
 

@@ -45,16 +45,80 @@ def read_pfm(path):
     return data.reshape(h, w, ch).astype(np.float64)
 
 
+FULL = {"ref_spp": 64, "size": "320x240", "small": "80x60"}  # the full run's (ctx.pick below)
+
+
+def plot(rows: list, out, ref_spp: int = FULL["ref_spp"], wh: str = FULL["size"], swh: str = FULL["small"]) -> None:
+    """lod.png from the rows of results.csv (also `run.py --replot`, with the full run's sizes)."""
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    plt = C.plt()
+    fig, axes = plt.subplots(1, 4, figsize=(20, 4.4))
+    for s in scenes:
+        pts = [r for r in rows if r["scene"] == s and r["rule"] == "fixed"]
+        cones = [r for r in rows if r["scene"] == s and r["rule"] == "cone"]
+        t0 = pts[0]["primary_s_median"]
+        axes[0].plot([r["primary_s_median"] / t0 for r in cones], [r["error_mean"] for r in cones], "*",
+                     markersize=10, label=f"{C.short(s)}: cone (labels: bias)")
+        for r in cones:
+            axes[0].annotate(f"b{r['bias']:g}", (r["primary_s_median"] / t0, r["error_mean"]), fontsize=7,
+                             xytext=(3, -9), textcoords="offset points")
+        for r in cones:
+            axes[3].axhline(r["error_mean"], linestyle=":", linewidth=0.8, alpha=0.6)
+        axes[0].plot([r["primary_s_median"] / t0 for r in pts], [r["error_mean"] for r in pts], "o-",
+                     label=f"{C.short(s)}: mean")
+        axes[0].plot([r["primary_s_median"] / t0 for r in pts], [r["error_max"] for r in pts], "x--",
+                     label=f"{C.short(s)}: max")
+        for r in pts:
+            axes[0].annotate(f"{r['lod']:g}", (r["primary_s_median"] / t0, r["error_mean"]), fontsize=7,
+                             xytext=(3, 3), textcoords="offset points")
+        axes[1].plot([r["lod"] for r in pts], [r["steps_per_camera_ray"] for r in pts], "o-",
+                     label=f"{C.short(s)}: camera rays")
+        axes[1].plot([r["lod"] for r in pts], [r["primary_s_median"] / t0 for r in pts], "s--",
+                     label=f"{C.short(s)}: primary time / λ=0")
+        axes[1].plot([r["lod"] for r in pts], [r["path_s_median"] / pts[0]["path_s_median"] for r in pts], "^:",
+                     label=f"{C.short(s)}: path time / λ=0")
+        axes[2].plot([r["lod"] for r in pts], [r["range_bytes"] / 2**20 for r in pts], "o-",
+                     label=f"{C.short(s)}: range query")
+        axes[2].plot([r["lod"] for r in pts], [r["total_bytes"] / 2**20 for r in pts], "s--",
+                     label=f"{C.short(s)}: all structures")
+        axes[3].plot([r["lod"] for r in pts], [r["error_mean"] for r in pts], "o-", label=f"{C.short(s)}: {wh}")
+        axes[3].plot([r["lod"] for r in pts], [r["error_mean_small"] for r in pts], "s--",
+                     label=f"{C.short(s)}: {swh} (16× texels per pixel)")
+    axes[0].set_xlabel("primary render time / time at λ = 0 (1 thread, median)")
+    # The metric: each pixel's mean absolute difference over RGB (L1), then the mean or max over pixels.
+    axes[0].set_ylabel(f"per-pixel L1 error (mean over RGB of |img − ref|)\nvs {ref_spp}-spp λ=0 reference")
+    axes[0].set_yscale("log")
+    axes[0].set_title("image error against run time (labels: λ; stars: --lod cone)")
+    axes[1].set_xlabel("λ")
+    axes[1].set_ylabel("steps per camera ray; time ratio")
+    axes[1].set_yscale("log")
+    axes[1].set_title("work against λ")
+    axes[2].set_xlabel("λ")
+    axes[2].set_ylabel("MiB")
+    axes[2].set_yscale("log")
+    axes[2].set_title("memory against λ")
+    axes[3].set_xlabel("λ")
+    axes[3].set_ylabel(f"mean per-pixel L1 error (mean over RGB of |img − ref|)\nvs {ref_spp}-spp λ=0 reference")
+    axes[3].set_yscale("log")
+    axes[3].set_title(f"1-spp primary image error against λ, two image sizes\n(dotted: --lod cone at {wh}, one per bias)")
+    for a in axes:
+        a.grid(True, which="both", alpha=0.3)
+        # "work against λ": its curves fall to the right, the lower left stays free.
+        a.legend(fontsize=6.5, loc="lower left" if a is axes[1] else "best")
+    fig.tight_layout()
+    fig.savefig(out / "lod.png", bbox_inches="tight")
+
+
 def run(ctx):
     import numpy as np
 
     scenes = ctx.pick(["paper/terracotta_roof", "paper/diving_helmet"], ["sphere"])
     lods = ctx.pick([0, 0.5, 1, 1.5, 2, 3, 4, 5, 6], [0, 1.5, 3])
     biases = ctx.pick([-2, -1, 0, 1], [0])  # --lod cone: a λ per ray from its ray cone, plus a bias
-    size = ctx.pick((320, 240), (48, 36))
-    small = ctx.pick((80, 60), (16, 12))  # the same view with 16x the texels per pixel
+    size = ctx.pick(tuple(map(int, FULL["size"].split("x"))), (48, 36))
+    small = ctx.pick(tuple(map(int, FULL["small"].split("x"))), (16, 12))  # the same view, 16x the texels per pixel
     check = ctx.pick((96, 72), (24, 18))
-    ref_spp = ctx.pick(64, 4)
+    ref_spp = ctx.pick(FULL["ref_spp"], 4)
     reps = ctx.reps(3, 1)
     wh = f"{size[0]}x{size[1]}"
     swh = f"{small[0]}x{small[1]}"
@@ -154,60 +218,8 @@ def run(ctx):
                          "rounds": len(p)})
     C.write_csv(ctx.out / "results.csv", rows)
 
-    plt = C.plt()
-    fig, axes = plt.subplots(1, 4, figsize=(20, 4.4))
-    for s in scenes:
-        pts = [r for r in rows if r["scene"] == s and r["rule"] == "fixed"]
-        cones = [r for r in rows if r["scene"] == s and r["rule"] == "cone"]
-        t0 = pts[0]["primary_s_median"]
-        axes[0].plot([r["primary_s_median"] / t0 for r in cones], [r["error_mean"] for r in cones], "*",
-                     markersize=10, label=f"{C.short(s)}: cone (labels: bias)")
-        for r in cones:
-            axes[0].annotate(f"b{r['bias']:g}", (r["primary_s_median"] / t0, r["error_mean"]), fontsize=7,
-                             xytext=(3, -9), textcoords="offset points")
-        for r in cones:
-            axes[3].axhline(r["error_mean"], linestyle=":", linewidth=0.8, alpha=0.6)
-        axes[0].plot([r["primary_s_median"] / t0 for r in pts], [r["error_mean"] for r in pts], "o-",
-                     label=f"{C.short(s)}: mean")
-        axes[0].plot([r["primary_s_median"] / t0 for r in pts], [r["error_max"] for r in pts], "x--",
-                     label=f"{C.short(s)}: max")
-        for r in pts:
-            axes[0].annotate(f"{r['lod']:g}", (r["primary_s_median"] / t0, r["error_mean"]), fontsize=7,
-                             xytext=(3, 3), textcoords="offset points")
-        axes[1].plot([r["lod"] for r in pts], [r["steps_per_camera_ray"] for r in pts], "o-",
-                     label=f"{C.short(s)}: camera rays")
-        axes[1].plot([r["lod"] for r in pts], [r["primary_s_median"] / t0 for r in pts], "s--",
-                     label=f"{C.short(s)}: primary time / λ=0")
-        axes[1].plot([r["lod"] for r in pts], [r["path_s_median"] / pts[0]["path_s_median"] for r in pts], "^:",
-                     label=f"{C.short(s)}: path time / λ=0")
-        axes[2].plot([r["lod"] for r in pts], [r["range_bytes"] / 2**20 for r in pts], "o-",
-                     label=f"{C.short(s)}: range query")
-        axes[2].plot([r["lod"] for r in pts], [r["total_bytes"] / 2**20 for r in pts], "s--",
-                     label=f"{C.short(s)}: all structures")
-        axes[3].plot([r["lod"] for r in pts], [r["error_mean"] for r in pts], "o-", label=f"{C.short(s)}: {wh}")
-        axes[3].plot([r["lod"] for r in pts], [r["error_mean_small"] for r in pts], "s--",
-                     label=f"{C.short(s)}: {swh} (16× texels per pixel)")
-    axes[0].set_xlabel("primary render time / time at λ = 0 (1 thread, median)")
-    axes[0].set_ylabel(f"per-pixel error vs {ref_spp}-spp λ=0 reference")
-    axes[0].set_yscale("log")
-    axes[0].set_title("image error against run time (labels: λ; stars: --lod cone)")
-    axes[1].set_xlabel("λ")
-    axes[1].set_ylabel("steps per camera ray; time ratio")
-    axes[1].set_yscale("log")
-    axes[1].set_title("work against λ")
-    axes[2].set_xlabel("λ")
-    axes[2].set_ylabel("MiB")
-    axes[2].set_yscale("log")
-    axes[2].set_title("memory against λ")
-    axes[3].set_xlabel("λ")
-    axes[3].set_ylabel(f"mean per-pixel error vs {ref_spp}-spp λ=0 reference")
-    axes[3].set_yscale("log")
-    axes[3].set_title("1-spp primary image error against λ, two image sizes")
-    for a in axes:
-        a.grid(True, which="both", alpha=0.3)
-        a.legend(fontsize=6.5)
-    fig.tight_layout()
-    fig.savefig(ctx.out / "lod.png")
+    plot(rows, ctx.out, ref_spp, wh, swh)
+
 
     header = ["scene", "λ", "primary s", "× λ=0", "path s", "× λ=0", "steps/camera ray", "range query",
               "mean error", "max error", f"mean error {swh}", "oracle mismatches"]
@@ -257,4 +269,4 @@ def run(ctx):
 
 
 if __name__ == "__main__":
-    sys.exit(C.main(sys.modules[__name__]))
+    sys.exit(C.replot(sys.modules[__name__]) if "--replot" in sys.argv else C.main(sys.modules[__name__]))

@@ -22,11 +22,59 @@ CURVES = {"rmip_low": "RMIP low", "rmip_normal": "RMIP normal", "rmip_high": "RM
           "minmax": "minmax mipmap in the RMIP traversal"}
 
 
+FULL_SIZE = "320x240"
+
+
+def plot(rows: list, out) -> None:
+    """marching_scale.png from the rows of results.csv (also `run.py --replot`)."""
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    curves = [cv for cv in CURVES if any(r["curve"] == cv for r in rows)]
+    # results.csv of runs before the size column: the committed full run's size.
+    size = rows[0].get("size") or FULL_SIZE
+    best = {(s, cv): min((r for r in rows if r["scene"] == s and r["curve"] == cv),
+                         key=lambda r: r["relative_time_median"]) for s in scenes for cv in curves}
+    plt = C.plt()
+    fig, axes = plt.subplots(2, len(scenes), figsize=(5.5 * len(scenes), 7), squeeze=False)
+    colors = {"rmip_low": "tab:green", "rmip_normal": "gold", "rmip_high": "tab:red", "minmax": "tab:blue"}
+    for j, s in enumerate(scenes):
+        ax = axes[0][j]
+        for cv in curves:
+            pts = [r for r in rows if r["scene"] == s and r["curve"] == cv]
+            xs = [r["marching_scale"] for r in pts]
+            ys = [r["relative_time_median"] for r in pts]
+            err = [[r["relative_time_median"] - r["relative_min"] for r in pts],
+                   [r["relative_max"] - r["relative_time_median"] for r in pts]]
+            lab = f"{CURVES[cv]} (mem ×{pts[0]['mem_vs_minmax_mipmap']:.2g})"
+            ax.errorbar(xs, ys, yerr=err, marker="o", ms=3, color=colors[cv], label=lab, capsize=2)
+            b = best[(s, cv)]
+            ax.plot([b["marching_scale"]], [b["relative_time_median"]], "o", ms=9, mfc="none", mec="k", mew=1.5)
+            axes[1][j].plot(xs, [r["boxes_per_ray"] for r in pts], "s--", ms=3, color=colors[cv])
+            axes[1][j].plot(xs, [r["cells_per_ray"] for r in pts], "o-", ms=3, color=colors[cv], label=CURVES[cv])
+        t = next(r for r in rows if r["scene"] == s and r["curve"] == "tfdm")
+        ax.axhline(t["relative_time_median"], color="k", ls="--", lw=1, label="TFDM (mem ×1)")
+        axes[1][j].axhline(t["boxes_per_ray"], color="k", ls="--", lw=0.8, label="TFDM boxes (dashed) / cells")
+        axes[1][j].axhline(t["cells_per_ray"], color="k", ls="-", lw=0.8)
+        for a in (ax, axes[1][j]):
+            a.set_xscale("log", base=2)
+            a.set_xlabel("marching scale (texels)")
+            a.grid(True, which="both", alpha=0.3)
+        ax.set_ylabel("render time / best RMIP-normal time")
+        ax.set_title(f"{s}: camera rays {size}, 1 thread\n(median and range over rounds; circle = best)")
+        ax.legend(fontsize=6.5)
+        axes[1][j].set_yscale("log")
+        axes[1][j].set_ylabel("per camera ray: boxes (dashed), cells marched (solid)")
+        axes[1][j].set_title(f"{s}: work per ray (exact counts)")
+        # Below the panel: inside, it covers the TFDM lines.
+        axes[1][j].legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3, frameon=False)
+    fig.tight_layout()
+    fig.savefig(out / "marching_scale.png", bbox_inches="tight")
+
+
 def run(ctx):
     scenes = ctx.pick(["paper/terracotta_roof", "paper/diving_helmet"], ["paper/terracotta_roof"])
     scales = ctx.pick([1, 2, 4, 8, 16, 32], [1, 4, 16])
     curves = ctx.pick(list(CURVES), ["rmip_normal", "minmax"])
-    size = ctx.pick("320x240", "32x24")
+    size = ctx.pick(FULL_SIZE, "32x24")
     reps = ctx.reps(3, 1)
     jobs, desc = [], {}
     for s in scenes:
@@ -69,46 +117,15 @@ def run(ctx):
                              "boxes_per_ray": st["ray_counters"]["boxes"] / st["rays"]["primary"],
                              "cells_per_ray": st["ray_counters"]["cells_marched"] / st["rays"]["primary"],
                              "range_bytes": C.range_bytes(st),
-                             "mem_vs_minmax_mipmap": C.range_bytes(st) / max(1, tfdm_bytes), "rounds": len(rs)})
+                             "mem_vs_minmax_mipmap": C.range_bytes(st) / max(1, tfdm_bytes), "rounds": len(rs),
+                             "size": size})
             if cv != "tfdm":
                 pts = [r for r in rows if r["scene"] == s and r["curve"] == cv]
                 best[(s, cv)] = min(pts, key=lambda r: r["relative_time_median"])
     C.write_csv(ctx.out / "results.csv", rows)
 
-    plt = C.plt()
-    fig, axes = plt.subplots(2, len(scenes), figsize=(5.5 * len(scenes), 7), squeeze=False)
-    colors = {"rmip_low": "tab:green", "rmip_normal": "gold", "rmip_high": "tab:red", "minmax": "tab:blue"}
-    for j, s in enumerate(scenes):
-        ax = axes[0][j]
-        for cv in curves:
-            pts = [r for r in rows if r["scene"] == s and r["curve"] == cv]
-            xs = [r["marching_scale"] for r in pts]
-            ys = [r["relative_time_median"] for r in pts]
-            err = [[r["relative_time_median"] - r["relative_min"] for r in pts],
-                   [r["relative_max"] - r["relative_time_median"] for r in pts]]
-            lab = f"{CURVES[cv]} (mem ×{pts[0]['mem_vs_minmax_mipmap']:.2g})"
-            ax.errorbar(xs, ys, yerr=err, marker="o", ms=3, color=colors[cv], label=lab, capsize=2)
-            b = best[(s, cv)]
-            ax.plot([b["marching_scale"]], [b["relative_time_median"]], "o", ms=9, mfc="none", mec="k", mew=1.5)
-            axes[1][j].plot(xs, [r["boxes_per_ray"] for r in pts], "s--", ms=3, color=colors[cv])
-            axes[1][j].plot(xs, [r["cells_per_ray"] for r in pts], "o-", ms=3, color=colors[cv], label=CURVES[cv])
-        t = next(r for r in rows if r["scene"] == s and r["curve"] == "tfdm")
-        ax.axhline(t["relative_time_median"], color="k", ls="--", lw=1, label="TFDM (mem ×1)")
-        axes[1][j].axhline(t["boxes_per_ray"], color="k", ls="--", lw=0.8, label="TFDM boxes (dashed) / cells")
-        axes[1][j].axhline(t["cells_per_ray"], color="k", ls="-", lw=0.8)
-        for a in (ax, axes[1][j]):
-            a.set_xscale("log", base=2)
-            a.set_xlabel("marching scale (texels)")
-            a.grid(True, which="both", alpha=0.3)
-        ax.set_ylabel("render time / best RMIP-normal time")
-        ax.set_title(f"{s}, camera rays {size}, 1 thread (median, range; circle = best)")
-        ax.legend(fontsize=6.5)
-        axes[1][j].set_yscale("log")
-        axes[1][j].set_ylabel("per camera ray: boxes (dashed), cells marched (solid)")
-        axes[1][j].set_title(f"{s}: work per ray (exact counts)")
-        axes[1][j].legend(fontsize=6.5)
-    fig.tight_layout()
-    fig.savefig(ctx.out / "marching_scale.png")
+    plot(rows, ctx.out)
+
 
     header = (["scene", "curve", "memory vs TFDM"] + [f"scale {k}" for k in scales]
               + ["best scale", "steps/camera ray at best"])
@@ -133,4 +150,4 @@ def run(ctx):
 
 
 if __name__ == "__main__":
-    sys.exit(C.main(sys.modules[__name__]))
+    sys.exit(C.replot(sys.modules[__name__]) if "--replot" in sys.argv else C.main(sys.modules[__name__]))

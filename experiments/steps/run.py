@@ -91,8 +91,11 @@ def run(ctx):
     shown = ["tfdm", "canonical"]
     cmap = plt.get_cmap("viridis").copy()
     cmap.set_bad("black")
-    fig, axes = plt.subplots(len(scenes), 5, figsize=(10.5, 2.45 * len(scenes)), squeeze=False,
-                             gridspec_kw={"width_ratios": [1, 1, 0.04, 0.22, 0.8], "wspace": 0.12})
+    height = 2.6 * len(scenes) + 0.6
+    fig, axes = plt.subplots(len(scenes), 5, figsize=(10.5, height), squeeze=False,
+                             gridspec_kw={"width_ratios": [1, 1, 0.04, 0.3, 0.8], "wspace": 0.12, "hspace": 0.4})
+    # The suptitle sits just above the first row, not a fixed fraction of a tall figure away.
+    fig.subplots_adjust(top=1 - 0.75 / height, bottom=0.35 / height)
     for i in range(len(scenes)):
         axes[i][3].axis("off")  # room for the colour bar's labels
     for i, s in enumerate(scenes):
@@ -105,22 +108,23 @@ def run(ctx):
             r = next(x for x in rows if x["scene"] == s and x["config"] == k)
             ax.set_title(f"{s}: {configs[k][0]}\nmean {r['steps_per_camera_ray']:.1f} steps/camera ray", fontsize=8)
             ax.axis("off")
-        fig.colorbar(im, cax=axes[i][2])
+        fig.colorbar(im, cax=axes[i][2]).set_label("steps per camera ray", fontsize=7)
         ax = axes[i][4]
         sel = [x for x in rows if x["scene"] == s]
         xs = range(len(sel))
         ax.bar(xs, [x["boxes_per_camera_ray"] for x in sel], color="tab:blue", label="boxes")
         ax.bar(xs, [x["cells_per_camera_ray"] for x in sel], bottom=[x["boxes_per_camera_ray"] for x in sel],
                color="tab:orange", label="cells marched")
-        ax.set_xticks(list(xs), [x["config"].replace("canonical", "canon.").replace("rmip_normal", "RMIP norm.")
-                                 .replace("driver_mipmap", "driver+mm").replace("tfdm_world", "tfdm world")
-                                 for x in sel], fontsize=6)
+        names = {"tfdm": "TFDM", "canonical": "canonical", "rmip_normal": "RMIP\nnormal",
+                 "driver_mipmap": "driver +\nmipmap", "tfdm_world": "TFDM\nworld"}
+        ax.set_xticks(list(xs), [names.get(x["config"], x["config"]) for x in sel], fontsize=6.5)
         ax.yaxis.tick_right()
         ax.yaxis.set_label_position("right")
         ax.set_ylabel("mean steps per camera ray")
-        ax.legend(fontsize=7)
+        if i == 0:  # one legend, above the first chart, where it hides no bar
+            ax.legend(fontsize=7, ncol=2, loc="lower center", bbox_to_anchor=(0.5, 1.02), frameon=False)
     fig.suptitle(f"Traversal steps per camera ray ({size}; boxes + marched cells; log colour scale shared per scene; "
-                 f"black = no step)", fontsize=9)
+                 f"black = no step)", fontsize=9, y=1 - 0.2 / height)
     fig.savefig(ctx.out / "steps.png", dpi=80, bbox_inches="tight")
 
     header = ["scene", "config", "steps/camera ray", "steps/hit ray", "boxes", "cells marched", "p99", "max",

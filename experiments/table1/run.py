@@ -26,6 +26,68 @@ LABELS = {"tfdm": "TFDM (1×)", "tfdm_world": C.TFDM_WORLD_LABEL, "driver_mipmap
           "rmip_low": "RMIP low", "rmip_normal": "RMIP normal", "rmip_high": "RMIP high"}
 
 
+# The configurations compared with TFDM, in the plot's and the table's order.
+COLS = ["tfdm_world", "driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
+
+
+def plot(rows: list, out) -> None:
+    """table1.png from the rows of results.csv (also `run.py --replot`)."""
+    names = list(dict.fromkeys(r["scene"] for r in rows))
+    sizes = {r["integrator"]: r["size"] for r in rows}
+    # Plot: speed-up over TFDM per scene (camera rays, path tracing) and memory ratio.
+    plt = C.plt()
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
+    cols = COLS
+    colors = {"tfdm_world": "tab:purple", "driver_mipmap": "tab:blue", "tessellated": "0.6", "rmip_low": "tab:green",
+              "rmip_normal": "tab:orange", "rmip_high": "tab:red"}
+    wbar = 0.13
+
+    def row(sc, integ, cfg):
+        return next(r for r in rows if r["scene"] == sc and r["integrator"] == integ and r["config"] == cfg)
+    for ax, integ in zip(axes[:2], sizes):
+        for i, cfg in enumerate(cols):
+            xs, ys, lo, hi = [], [], [], []
+            for j, sc in enumerate(names):
+                r = row(sc, integ, cfg)
+                if not r["fits"]:
+                    continue
+                xs.append(j + (i - 2.5) * wbar)
+                ys.append(r["speedup_vs_tfdm_median"])
+                lo.append(r["speedup_vs_tfdm_median"] - r["speedup_min"])
+                hi.append(r["speedup_max"] - r["speedup_vs_tfdm_median"])
+            ax.bar(xs, ys, wbar, yerr=[lo, hi], color=colors[cfg], label=LABELS[cfg], capsize=2)
+        ax.axhline(1, color="k", lw=0.8)
+        ax.set_yscale("log")
+        # Numbered at 1, 2, 5 per decade: one labelled tick per panel does not read.
+        ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1, 2, 5)))
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"×{v:g}"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.set_xticks(range(len(names)), names, rotation=20, fontsize=7)
+        ax.set_ylabel("speed-up over TFDM (median, range)")
+        ax.set_title(f"{integ} ({sizes[integ]}, 1 spp, 1 thread)")
+        ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax = axes[2]
+    for i, cfg in enumerate(cols):
+        pts = [(j + (i - 2.5) * wbar, row(sc, "primary", cfg)) for j, sc in enumerate(names)]
+        pts = [(x, r) for x, r in pts if r["fits"]]
+        ax.bar([x for x, _ in pts], [r["mem_ratio_vs_tfdm"] for _, r in pts], wbar, color=colors[cfg],
+               label=LABELS[cfg])
+    ax.axhline(1, color="k", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(names)), names, rotation=20, fontsize=7)
+    ax.set_ylabel("data-structure memory / TFDM's mipmap")
+    ax.set_title("memory (lower is better)")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    # One legend for the three panels, below them, where it hides no bar.
+    # Patches by hand: a configuration that fits no scene has an empty bar set, whose handle has no colour.
+    from matplotlib.patches import Patch
+    handles = [Patch(color=colors[c], label=LABELS[c]) for c in cols]
+    fig.legend(handles=handles, loc="lower center", ncol=len(cols), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.savefig(out / "table1.png", bbox_inches="tight")
+
+
 def run(ctx):
     scenes = ctx.pick(C.PAPER_SCENES, ["paper/terracotta_roof"])
     sizes = {"primary": ctx.pick("256x192", "32x24"), "path": ctx.pick("128x96", "16x12")}
@@ -105,49 +167,8 @@ def run(ctx):
     C.write_csv(ctx.out / "results.csv", rows)
     names = [C.short(s) for s in scenes]
 
-    # Plot: speed-up over TFDM per scene (camera rays, path tracing) and memory ratio.
-    plt = C.plt()
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
-    cols = ["tfdm_world", "driver_mipmap", "tessellated", "rmip_low", "rmip_normal", "rmip_high"]
-    colors = {"tfdm_world": "tab:purple", "driver_mipmap": "tab:blue", "tessellated": "0.6", "rmip_low": "tab:green",
-              "rmip_normal": "tab:orange", "rmip_high": "tab:red"}
-    wbar = 0.13
-
-    def row(sc, integ, cfg):
-        return next(r for r in rows if r["scene"] == sc and r["integrator"] == integ and r["config"] == cfg)
-    for ax, integ in zip(axes[:2], sizes):
-        for i, cfg in enumerate(cols):
-            xs, ys, lo, hi = [], [], [], []
-            for j, sc in enumerate(names):
-                r = row(sc, integ, cfg)
-                if not r["fits"]:
-                    continue
-                xs.append(j + (i - 2.5) * wbar)
-                ys.append(r["speedup_vs_tfdm_median"])
-                lo.append(r["speedup_vs_tfdm_median"] - r["speedup_min"])
-                hi.append(r["speedup_max"] - r["speedup_vs_tfdm_median"])
-            ax.bar(xs, ys, wbar, yerr=[lo, hi], color=colors[cfg], label=LABELS[cfg], capsize=2)
-        ax.axhline(1, color="k", lw=0.8)
-        ax.set_yscale("log")
-        ax.set_xticks(range(len(names)), names, rotation=20, fontsize=7)
-        ax.set_ylabel("speed-up over TFDM (median, range)")
-        ax.set_title(f"{integ} ({sizes[integ]}, 1 spp, 1 thread)")
-        ax.grid(True, axis="y", which="both", alpha=0.3)
-    ax = axes[2]
-    for i, cfg in enumerate(cols):
-        pts = [(j + (i - 2.5) * wbar, row(sc, "primary", cfg)) for j, sc in enumerate(names)]
-        pts = [(x, r) for x, r in pts if r["fits"]]
-        ax.bar([x for x, _ in pts], [r["mem_ratio_vs_tfdm"] for _, r in pts], wbar, color=colors[cfg],
-               label=LABELS[cfg])
-    ax.axhline(1, color="k", lw=0.8)
-    ax.set_yscale("log")
-    ax.set_xticks(range(len(names)), names, rotation=20, fontsize=7)
-    ax.set_ylabel("data-structure memory / TFDM's mipmap")
-    ax.set_title("memory (lower is better)")
-    ax.grid(True, axis="y", which="both", alpha=0.3)
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(ctx.out / "table1.png")
+    plot(rows, ctx.out)
+    cols = COLS
 
     # Markdown: the paper's layout, one row per scene and integrator.
     header = (["scene", "rays", "TFDM mem", "TFDM time", "TFDM steps/ray"]
@@ -211,4 +232,4 @@ def run(ctx):
 
 
 if __name__ == "__main__":
-    sys.exit(C.main(sys.modules[__name__]))
+    sys.exit(C.replot(sys.modules[__name__]) if "--replot" in sys.argv else C.main(sys.modules[__name__]))

@@ -3,11 +3,12 @@
 // displacement --displacement, --scale, --bias and --tiling set.
 //   oblong render [SCENE.json] -o out.png [--size WxH] [--spp N] [--integrator primary|ao|path] [--seed S]
 //                 [--normals micro|smooth] [--threads N] [--aovs out.exr] [--heatmap steps.png]
-//                 [--stats out.json] [-q] [strategy flags]
+//                 [--heatmap-max N] [--stats out.json] [-q] [strategy flags]
 //   oblong trace  [SCENE.json] --rays RAYS.csv|.bin -o HITS.csv|.bin [--stats out.json] [-q] [strategy flags]
 //   oblong info   [SCENE.json] [--range NAME] | --strategies [--json]
 //   oblong bake   [SCENE.json] -o SCENE.oblg [--size WxH] [--rays RAYS] [strategy flags]
 //   oblong export [SCENE.json] -o MESH.ply [--lod off|λ]
+//   oblong compare A B [-o ERROR.png|.exr] [--max E] [--json]   (B the reference)
 //   oblong --version
 // -q (render, trace): nothing on standard output; warnings and errors still go to stderr.
 // Strategy flags (override the scene's "strategies" block): --range, --inverter,
@@ -25,6 +26,7 @@
 #include "core/scene.h"
 #include "core/stats.h"
 #include "render/embree_scene.h"
+#include "render/figures.h"
 #include "render/image.h"
 #include "render/mesh_export.h"
 #include "render/output.h"
@@ -44,6 +46,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <filesystem>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -139,8 +143,17 @@ void warnEmptyHeatMap(const Scene& scene, const AccelOptions& accel, const Rende
 // render's outputs and display; its options are RenderFlags (render/program.h).
 struct RenderOutputs {
   std::string out = "oblong.png", statsPath, aovs, heatmap, progress = "auto";
-  bool quiet = false, defaultOut = true;
+  float heatmapMax = 0;  // 0: each map to its own maximum
+  bool quiet = false, defaultOut = true, heatmapMaxGiven = false;
 };
+
+// A colour bar without its numbers still shows the colours; the scale is in the summary.
+void warnUnlabelled(const FalseColourResult& r, const std::string& flag, const std::string& path) {
+  if (!r.labelled)
+    eprint("oblong: warning: {} {}: no font for the colour bar's numbers (DejaVu Sans: Debian's fonts-dejavu-core): "
+           "the bar has none\n",
+           flag, path);
+}
 
 int runRender(const std::string& scenePath, const RenderFlags& rf, const RenderOutputs& f, const StrategyFlags& flags) {
   // Everything the command line decides is checked before the scene is loaded.
@@ -155,6 +168,11 @@ int runRender(const std::string& scenePath, const RenderFlags& rf, const RenderO
     if (ext != ".exr") fail(f.aovs, "AOVs are written as one multi-channel EXR: use a .exr name");
   }
   if (!f.heatmap.empty()) checkImageOutput(f.heatmap, "heat map");
+  if (f.heatmapMaxGiven) {
+    if (f.heatmap.empty()) fail("--heatmap-max", "applies to a heat map: give --heatmap too");
+    if (!(f.heatmapMax > 0) || !std::isfinite(f.heatmapMax))
+      fail("--heatmap-max", "must be a number of steps > 0, got {}", f.heatmapMax);
+  }
   if (!f.statsPath.empty()) checkOutputPath(f.statsPath, "statistics");
   const std::vector<std::pair<std::string, std::string>> outputs = {
       {"-o", f.out}, {"--aovs", f.aovs}, {"--heatmap", f.heatmap}, {"--stats", f.statsPath}};
@@ -193,10 +211,13 @@ int runRender(const std::string& scenePath, const RenderFlags& rf, const RenderO
   progress.phase("writing " + f.out);
   writeImage(res.aov.color, f.out);
   if (!f.aovs.empty()) writeAOVs(res.aov, f.aovs);
-  if (!f.heatmap.empty()) writeHeatMap(res.aov, f.heatmap);
+  const HeatMapScale heat = heatMapScale(res.aov, f.heatmapMax);
+  FalseColourResult heatWritten;
+  if (!f.heatmap.empty()) heatWritten = writeHeatMap(res.aov, f.heatmap, heat);
   progress.clear();
   if (!f.heatmap.empty()) warnEmptyHeatMap(scene, accelOpts, res, f.heatmap);
-  const RenderReport report{scene, accelOpts, *backend, opts, res, f.out, f.heatmap, f.defaultOut};
+  if (!f.heatmap.empty()) warnUnlabelled(heatWritten, "--heatmap", f.heatmap);
+  const RenderReport report{scene, accelOpts, *backend, opts, res, f.out, f.heatmap, f.defaultOut, heat};
   if (!f.quiet) printRenderSummary(report);
   // The summary's `partial` line, as a warning, when there is no summary.
   if (f.quiet && res.partial)
@@ -299,6 +320,73 @@ int runExport(const std::string& scenePath, const std::string& out, const std::s
   return 0;
 }
 
+// `oblong compare A B`: relMSE and PSNR of A against the reference B (render/figures.h) and
+// an error image: false colour with a numbered bar (8-bit formats) or each pixel's relative
+// squared error as grey (EXR, TIFF, HDR, PFM: the values themselves).
+int runCompare(const std::string& a, const std::string& b, const std::string& out, float max, bool maxGiven,
+               bool json) {
+  if (maxGiven && !(max > 0 && std::isfinite(max))) fail("--max", "must be an error > 0, got {}", max);
+  if (maxGiven && out.empty()) fail("--max", "applies to the error image: give -o too");
+  if (!out.empty()) {
+    checkImageOutput(out, "error image");
+    checkNotInputs({{"-o", out}}, {{"image", a}, {"reference", b}});
+  }
+  const Comparison c = compareImages(a, b);
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& ch : ext) ch = char(std::tolower((unsigned char)ch));
+  const bool data = ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".hdr" || ext == ".pfm";
+  ColourScale scale;
+  scale.kind = ColourScale::Kind::Decades;
+  scale.decades = 3;
+  scale.max = maxGiven ? max : std::max(c.maxPerPixel, 1e-12f);
+  scale.captions = {"relative squared error (a-b)^2/(b^2+0.01), log scale", "relative squared error, log scale",
+                    "rel. sq. error, log"};
+  int64_t above = 0;
+  for (float v : c.perPixel) above += v > scale.max;
+  FalseColourResult written;
+  if (!out.empty() && data) {
+    Image img(c.width, c.height);
+    for (size_t i = 0; i < c.perPixel.size(); ++i) img.pixels[i] = vec3(c.perPixel[i]);
+    writeImage(img, out);
+  } else if (!out.empty()) {
+    written = writeFalseColour(c.perPixel, c.width, c.height, scale, out);
+  }
+  const double scaleLo = scale.max * std::pow(10.0, -scale.decades);
+  if (json) {
+    nlohmann::json j;
+    j["image"] = a;
+    j["reference"] = b;
+    j["width"] = c.width;
+    j["height"] = c.height;
+    j["relmse"] = c.relMSE;
+    j["mse"] = c.mse;
+    j["psnr_db"] = std::isfinite(c.psnr) ? nlohmann::json(c.psnr) : nlohmann::json("inf");
+    j["max_pixel_error"] = c.maxPerPixel;
+    j["definitions"] = {{"relmse", "mean over pixels and RGB of (a-b)^2/(b^2+0.01), b the reference, linear values"},
+                        {"psnr_db", "10 log10(1/MSE), peak 1"}};
+    if (!out.empty())
+      j["error_image"] = data ? nlohmann::json{{"file", out}, {"values", "per-pixel relative squared error"}}
+                              : nlohmann::json{{"file", out}, {"scale", "log"}, {"min", scaleLo},
+                                               {"max", scale.max}, {"fixed", maxGiven}, {"pixels_above", above}};
+    fmt::print("{}\n", j.dump(2));
+  } else {
+    fmt::print("oblong compare: {} against the reference {}, {}x{}\n", a, b, c.width, c.height);
+    fmt::print("  relMSE   : {:.6g} (mean over pixels and RGB of (a-b)^2/(b^2+0.01), linear values)\n", c.relMSE);
+    fmt::print("  PSNR     : {} (10 log10(1/MSE), peak 1; MSE {:.6g})\n",
+               std::isfinite(c.psnr) ? fmt::format("{:.2f} dB", c.psnr) : std::string("inf, identical images"), c.mse);
+    if (!out.empty() && data)
+      fmt::print("  error    : {}, each pixel's relative squared error (mean over RGB), grey\n", out);
+    else if (!out.empty())
+      fmt::print("  error    : {}, relative squared error per pixel, log scale, colour bar {:.2g} .. {:.2g}{}\n", out,
+                 scaleLo, scale.max,
+                 maxGiven ? fmt::format(" (--max; the image's largest {:.2g}, {} pixel{} above the scale)",
+                                        c.maxPerPixel, above, above == 1 ? "" : "s")
+                          : std::string());
+  }
+  warnUnlabelled(written, "-o", out);
+  return 0;
+}
+
 // `oblong info --strategies`: every registered strategy (what the experiments read).
 int runStrategies(bool json) {
   const nlohmann::json j = strategiesJson();
@@ -356,7 +444,11 @@ int main(int argc, char** argv) {
                      "shading normals: micro (the micro-triangle's) | smooth (PDM paper §5.1)");
   render->add_option("--seed", rf.seed, "random seed in [0, 2^64) (same seed, same image, any thread count)");
   render->add_option("--aovs", ro.aovs, "multi-channel EXR: colour, depth, normal, per-pixel counters");
-  render->add_option("--heatmap", ro.heatmap, "false-colour log-scale heat map of traversal steps (PNG)");
+  render->add_option("--heatmap", ro.heatmap,
+                     "false-colour log-scale heat map of traversal steps per camera ray, numbered colour bar (PNG)");
+  auto* heatmapMax = render->add_option(
+      "--heatmap-max", ro.heatmapMax,
+      "top of the heat map's scale in steps, the same for every run given it (default: the image's maximum)");
   render->add_flag("-q,--quiet", ro.quiet,
                    "print nothing but warnings and errors (stderr): no summary, no progress display");
   render->add_option("--progress", ro.progress,
@@ -406,6 +498,20 @@ int main(int argc, char** argv) {
   exportCmd->add_option("--lod", lodFlag, "level of detail: off | a number >= 0 (default: the scene's)");
   addAssetFlags(exportCmd);
 
+  auto* compare = app.add_subcommand("compare", "relMSE and PSNR of an image against a reference, and an error image");
+  std::string compareA, compareB, compareOut;
+  float compareMax = 0;
+  bool compareJson = false;
+  compare->add_option("image", compareA, "the image to measure (EXR, PNG, ...: what OpenImageIO reads)")->required();
+  compare->add_option("reference", compareB, "the reference image, of the same size")->required();
+  compare->add_option("-o,--output", compareOut,
+                      "error image: false colour with a numbered bar (.png, ...) or the per-pixel values (.exr, "
+                      ".tif, .hdr, .pfm)");
+  auto* compareMaxOpt = compare->add_option(
+      "--max", compareMax, "top of the error image's colour scale, the same for every run given it (default: the "
+                           "image's largest per-pixel error)");
+  compare->add_flag("--json", compareJson, "print the numbers as JSON");
+
   auto* info = app.add_subcommand("info", "what the scene needs and what is built for it");
   info->add_option("scene", scenePath, kSceneHelp);
   info->add_option("--range", range, "range-query strategy (default: the scene's)");
@@ -420,7 +526,8 @@ int main(int argc, char** argv) {
   for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
     known = known || (argc > 1 && sub->get_name() == argv[1]);
   if (argc > 1 && argv[1][0] != '-' && !known) {
-    eprint("oblong: command line: unknown command '{}' (render, trace, info, bake or export; oblong --help lists them)\n",
+    eprint("oblong: command line: unknown command '{}' (render, trace, info, bake, export or compare; oblong --help "
+           "lists them)\n",
            argv[1]);
     return 1;
   }
@@ -450,11 +557,14 @@ int main(int argc, char** argv) {
     // Ctrl-C keeps what was rendered (render) or writes nothing (trace, export).
     if (*render || *trace || *exportCmd) catchInterrupt();
     ro.defaultOut = renderOut->count() == 0;
+    ro.heatmapMaxGiven = heatmapMax->count() > 0;
     if (*render) status = runRender(scenePath, rf, ro, flags);
     else if (*trace)
       status = runTrace(scenePath, raysPath, hitsPath, traceOut->count() == 0, threads, statsPath, traceQuiet, flags);
     else if (*bake) status = runBake(scenePath, bakeOut, bakeSize, raysPath, flags);
     else if (*exportCmd) status = runExport(scenePath, exportOut, lodFlag);
+    else if (*compare)
+      status = runCompare(compareA, compareB, compareOut, compareMax, compareMaxOpt->count() > 0, compareJson);
     else if (*info && listStrategies) status = runStrategies(infoJson);
     else if (*info && infoJson) fail("--json", "only applies to --strategies");
     else if (*info) status = runInfo(scenePath, range, lodFlag);
