@@ -775,7 +775,7 @@ void checkBarHasText(const Pixels& p, int mapHeight) {
 
 }  // namespace
 
-TEST_CASE("oblong render --heatmap-max fixes the heat map's scale; the colour bar is numbered", "[cli]") {
+TEST_CASE("oblong render --heatmap-max fixes the heat map's scale, and the colour bar is numbered", "[cli]") {
   const auto dir = oblong::test::scratchDir("cli_heatmap_max");
   auto path = [&](const std::string& n) { return (dir / n).string(); };
   const std::string common = " --size 96x64 --threads 2 --integrator primary -q";

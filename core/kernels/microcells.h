@@ -57,6 +57,7 @@ struct McPV {
 // is the same corner for every cell.
 struct McEdges {
   dvec2 S[3];
+  dvec2 SA[3], SB[3];  // S[A[e]], S[B[e]]: read for every cell
   int A[3], B[3];
   double sigma[3];
   ivec2 least[3];
@@ -108,6 +109,8 @@ OBLONG_INLINE McEdges mcEdges(OBLONG_IN_ARRAY dvec2 S[3], OBLONG_IN_ARRAY vec2 t
     }
     E.A[e] = A;
     E.B[e] = B;
+    E.SA[e] = S[A];
+    E.SB[e] = S[B];
     E.sigma[e] = mcOrient(S[A], S[B], S[3 - A - B]) > 0.0 ? 1.0 : -1.0;
     // sigma·orient grows with x where sigma·(SB − SA).y < 0 and with y where sigma·(SB − SA).x > 0.
     OBLONG_PRECISE dvec2 d = S[B] - S[A];
@@ -118,7 +121,7 @@ OBLONG_INLINE McEdges mcEdges(OBLONG_IN_ARRAY dvec2 S[3], OBLONG_IN_ARRAY vec2 t
 
 // sigma·orient of p against edge e.
 OBLONG_FORCE_INLINE double mcSide(OBLONG_IN(McEdges) E, int e, OBLONG_IN(dvec2) p) {
-  OBLONG_PRECISE double r = E.sigma[e] * mcOrient(E.S[E.A[e]], E.S[E.B[e]], p);
+  OBLONG_PRECISE double r = E.sigma[e] * mcOrient(E.SA[e], E.SB[e], p);
   return r;
 }
 OBLONG_FORCE_INLINE bool mcInside(OBLONG_IN(McEdges) E, int e, OBLONG_IN(dvec2) p) { return mcSide(E, e, p) >= 0.0; }
@@ -138,8 +141,8 @@ OBLONG_FORCE_INLINE bool mcInterior(OBLONG_IN(McEdges) E, int i, int j) {
 OBLONG_INLINE int mcClipMask(OBLONG_IN(McEdges) E, int i, int j) {
   int mask = 0;
   for (int e = 0; e < 3; ++e) {
-    dvec2 SA = E.S[E.A[e]];
-    OBLONG_PRECISE dvec2 d = E.S[E.B[e]] - SA;
+    dvec2 SA = E.SA[e];
+    OBLONG_PRECISE dvec2 d = E.SB[e] - SA;
     OBLONG_PRECISE double margin =
         1e-9 * (abs(d.x) + abs(d.y)) * (1.0 + abs(double(i)) + abs(double(j)) + abs(SA.x) + abs(SA.y));
     if (!(mcSide(E, e, dvec2(i + E.least[e].x, j + E.least[e].y)) > margin)) mask |= 1 << e;
@@ -151,7 +154,7 @@ OBLONG_INLINE int mcClipMask(OBLONG_IN(McEdges) E, int i, int j) {
 // Not clamped: Sutherland-Hodgman clips against whole lines, and an intermediate crossing
 // may lie beyond T's vertices (later clips remove it).
 OBLONG_INLINE double mcCrossParamRaw(OBLONG_IN(McEdges) E, int e, int type, int c) {
-  dvec2 a = E.S[E.A[e]], b = E.S[E.B[e]];
+  dvec2 a = E.SA[e], b = E.SB[e];
   OBLONG_PRECISE double t;
   if (type == OBLONG_MC_LINE_V) t = (double(c) - a.x) / (b.x - a.x);
   else if (type == OBLONG_MC_LINE_H) t = (double(c) - a.y) / (b.y - a.y);
@@ -203,8 +206,8 @@ OBLONG_INLINE int mcClip(OBLONG_IN(McEdges) E, int e, McBuf buf, int inBase, int
         x.lineType = a.nextType;
         x.lineC = a.nextC;
         double t = mcCrossParamRaw(E, e, a.nextType, a.nextC);
-        dvec2 SA = E.S[E.A[e]];
-        OBLONG_PRECISE dvec2 s = SA + t * (E.S[E.B[e]] - SA);
+        dvec2 SA = E.SA[e];
+        OBLONG_PRECISE dvec2 s = SA + t * (E.SB[e] - SA);
         x.s = s;
       }
       // Leaving: the polygon continues along T's edge; entering: along a's line.
@@ -330,14 +333,14 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
   if (v.kind == OBLONG_MC_CROSS) {
     edge = v.a;
     t = clamp(mcCrossParamRaw(E, v.a, v.lineType, v.lineC), 0.0, 1.0);  // a final vertex: on the segment
-    dvec2 SA = E.S[E.A[edge]];
-    OBLONG_PRECISE dvec2 s = SA + t * (E.S[E.B[edge]] - SA);
+    dvec2 SA = E.SA[edge];
+    OBLONG_PRECISE dvec2 s = SA + t * (E.SB[edge] - SA);
     raw = mcLineHeight(hs, v.lineType, v.lineC, s);
   } else {
     for (int e = 0; e < 3 && edge < 0; ++e)
-      if ((mask >> e & 1) != 0 && mcOrient(E.S[E.A[e]], E.S[E.B[e]], v.s) == 0.0) {
-        dvec2 SA = E.S[E.A[e]];
-        OBLONG_PRECISE dvec2 ab = E.S[E.B[e]] - SA;
+      if ((mask >> e & 1) != 0 && mcOrient(E.SA[e], E.SB[e], v.s) == 0.0) {
+        dvec2 SA = E.SA[e];
+        OBLONG_PRECISE dvec2 ab = E.SB[e] - SA;
         OBLONG_PRECISE dvec2 q = v.s - SA;
         OBLONG_PRECISE double u = (q.x * ab.x + q.y * ab.y) / (ab.x * ab.x + ab.y * ab.y);
         t = clamp(u, 0.0, 1.0);
