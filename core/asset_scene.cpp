@@ -49,6 +49,21 @@ struct Material {
   }
 };
 
+// One material for the whole mesh file: the first that displaces, else the first; the
+// others that differ from it are named in a warning.
+Material pickMaterial(const std::string& path, const std::vector<Material>& used) {
+  const auto chosen = std::find_if(used.begin(), used.end(), [](const Material& m) { return !m.map.empty(); });
+  const Material pick = chosen != used.end() ? *chosen : used.front();
+  std::vector<std::string> others;
+  for (const Material& m : used)
+    if (m.name != pick.name && !m.sameAs(pick)) others.push_back("'" + m.name + "'");
+  if (!others.empty())
+    eprint("oblong: warning: {}: oblong applies one material to a whole mesh file: '{}'; not used: {} (write a "
+           "scene file with one mesh file per material)\n",
+           path, pick.name, fmt::join(others, ", "));
+  return pick;
+}
+
 // ---- OBJ + MTL ---------------------------------------------------------------------
 
 std::vector<std::string> tokens(const std::string& line) {
@@ -295,17 +310,7 @@ std::optional<Material> objMaterial(const std::string& path, const AssetFlags& f
     used.push_back(fromMtl(it->second, fs::path(path).parent_path(), flags));
   }
   if (used.empty()) return std::nullopt;
-  // One material for the whole mesh: the first that displaces, else the first.
-  const auto chosen = std::find_if(used.begin(), used.end(), [](const Material& m) { return !m.map.empty(); });
-  const Material pick = chosen != used.end() ? *chosen : used.front();
-  std::vector<std::string> others;
-  for (const Material& m : used)
-    if (m.name != pick.name && !m.sameAs(pick)) others.push_back("'" + m.name + "'");
-  if (!others.empty())
-    eprint("oblong: warning: {}: oblong applies one material to a whole mesh file: '{}'; not used: {} (write a "
-           "scene file with one mesh file per material)\n",
-           path, pick.name, fmt::join(others, ", "));
-  return pick;
+  return pickMaterial(path, used);
 }
 
 // ---- glTF / GLB --------------------------------------------------------------------
@@ -495,16 +500,7 @@ std::optional<Material> gltfMaterial(const std::string& path, bool glb, const As
   if (used.empty()) return std::nullopt;
   std::vector<Material> mats;
   for (size_t m : used) mats.push_back(fromGltfMaterial(path, doc, m, flags));
-  const auto chosen = std::find_if(mats.begin(), mats.end(), [](const Material& m) { return !m.map.empty(); });
-  const Material pick = chosen != mats.end() ? *chosen : mats.front();
-  std::vector<std::string> others;
-  for (const Material& m : mats)
-    if (m.name != pick.name && !m.sameAs(pick)) others.push_back("'" + m.name + "'");
-  if (!others.empty())
-    eprint("oblong: warning: {}: oblong applies one material to a whole mesh file: '{}'; not used: {} (write a "
-           "scene file with one mesh file per material)\n",
-           path, pick.name, fmt::join(others, ", "));
-  return pick;
+  return pickMaterial(path, mats);
 }
 
 // ---- flags -------------------------------------------------------------------------

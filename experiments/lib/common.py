@@ -497,6 +497,19 @@ def write_csv(path: Path, rows: list, fields: list | None = None) -> None:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items() if k in fields})
 
 
+def read_pfm(path):
+    """An RGB (PF) or grey (Pf) PFM as a float64 array h x w x channels, row 0 at the top
+    (PFM stores the bottom row first)."""
+    import numpy as np
+    with open(path, "rb") as f:
+        kind = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        ch = 3 if kind == b"PF" else 1
+        data = np.fromfile(f, dtype="<f4" if scale < 0 else ">f4", count=w * h * ch)
+    return np.flipud(data.reshape(h, w, ch)).astype(np.float64)
+
+
 def read_csv(path: Path) -> list:
     """The rows write_csv wrote, with numbers and booleans as such ('' is None)."""
     def value(v: str):

@@ -34,17 +34,6 @@ HYPOTHESIS = ("RMIP §2 / §5 Fig. 6 (fractional LoD) and TFDM: tracing a coarse
               "one (less aliasing), until λ removes detail the pixels do show; the traversal stays exact at every λ.")
 
 
-def read_pfm(path):
-    import numpy as np
-    with open(path, "rb") as f:
-        kind = f.readline().strip()
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        ch = 3 if kind == b"PF" else 1
-        data = np.fromfile(f, dtype="<f4" if scale < 0 else ">f4", count=w * h * ch)
-    return data.reshape(h, w, ch).astype(np.float64)
-
-
 FULL = {"ref_spp": 64, "size": "320x240", "small": "80x60"}  # the full run's (ctx.pick below)
 
 
@@ -164,7 +153,7 @@ def run(ctx):
                 C.run_oblong(ctx, "render", C.scene_path(s), flags + ["--lod", "cone", "--lod-bias", b, "--integrator",
                                                                       "primary", "--size", f"{check[0]}x{check[1]}",
                                                                       "-o", out], label=f"{s}/cone/{k}", threads=2)
-                imgs[k] = read_pfm(out)
+                imgs[k] = C.read_pfm(out)
             diff = int((np.abs(imgs["canonical"] - imgs["bruteforce"]).max(axis=2) > 0).sum())
             exact[f"cone{b:g}"] = {"rays": check[0] * check[1], "mismatches": diff}
             if diff:
@@ -176,7 +165,7 @@ def run(ctx):
                 jobs.append((f"{s}/cone{b:g}/{integ}", "render", C.scene_path(s),
                              ["--lod", "cone", "--lod-bias", b, "--integrator", integ, "--size", wh,
                               "-o", ctx.tmp(f"{C.short(s)}_cone{b:g}_{integ}.pfm")]))
-        setup[s] = {"ref": read_pfm(ref_path), "ref_small": read_pfm(ctx.tmp(f"{C.short(s)}_ref_small.pfm")),
+        setup[s] = {"ref": C.read_pfm(ref_path), "ref_small": C.read_pfm(ctx.tmp(f"{C.short(s)}_ref_small.pfm")),
                     "ref_s": ref.seconds, "exact": exact, "map": C.map_size(doc)}
         ctx.log(f"{s}: reference {wh} at {ref_spp} spp in {ref.seconds:.1f} s (2 threads); oracle check "
                 f"{check[0]}x{check[1]} rays at {len(lods) - 1} λ > 0: "
@@ -191,9 +180,9 @@ def run(ctx):
             cone = isinstance(lam, str)
             key = lam if cone else f"{lam:g}"
             p, q = res[f"{s}/{key}/primary"], res[f"{s}/{key}/path"]
-            img = read_pfm(ctx.tmp(f"{C.short(s)}_{key}_primary.pfm"))  # deterministic (same seed every round)
+            img = C.read_pfm(ctx.tmp(f"{C.short(s)}_{key}_primary.pfm"))  # deterministic (same seed every round)
             err = np.abs(img - su["ref"]).mean(axis=2)
-            err_small = np.abs(read_pfm(ctx.tmp(f"{C.short(s)}_{key}_small.pfm")) - su["ref_small"]).mean(axis=2)
+            err_small = np.abs(C.read_pfm(ctx.tmp(f"{C.short(s)}_{key}_small.pfm")) - su["ref_small"]).mean(axis=2)
             st, sq = p[0].stats, q[0].stats
             lod_used = st["config"]["lod"]
             per = [x for x in lod_used["per_mesh"] if x is not None] if isinstance(lod_used, dict) and \

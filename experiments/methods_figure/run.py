@@ -32,18 +32,6 @@ METHODS = [("canonical", "canonical (RMIP)", C.CANONICAL),
            ("fixedstep", "fixed step (1 texel)", ["--baseline", "fixedstep"])]
 
 
-def read_pfm(path):
-    """An RGB PFM as a float array, row 0 at the top (PFM stores the bottom row first)."""
-    import numpy as np
-    with open(path, "rb") as f:
-        kind = f.readline().strip()
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        ch = 3 if kind == b"PF" else 1
-        data = np.fromfile(f, dtype="<f4" if scale < 0 else ">f4", count=w * h * ch)
-    return np.flipud(data.reshape(h, w, ch)).astype(np.float64)
-
-
 def compare(ctx, image: Path, reference: Path, error: Path) -> dict:
     p = subprocess.run([str(ctx.binary), "compare", str(image), str(reference), "-o", str(error), "--json"],
                        capture_output=True, text=True, timeout=120)
@@ -92,8 +80,8 @@ def run(ctx):
         run_ = final[key][0]
         err = ctx.tmp(f"{key}_error.pfm")
         c = compare(ctx, img, ref, err)
-        images[key] = read_pfm(img)
-        errors[key] = read_pfm(err)[:, :, 0]
+        images[key] = C.read_pfm(img)
+        errors[key] = C.read_pfm(err)[:, :, 0]
         rows.append({"method": key, "label": label, "spp": spp[key], "seconds_per_spp_pilot": per_spp[key],
                      "seconds": C.med([x.seconds for x in final[key]]),
                      "seconds_min": min(x.seconds for x in final[key]),
@@ -128,7 +116,7 @@ def run(ctx):
     norm = LogNorm(vmin=vmax * 1e-3, vmax=vmax)
     cmap = plt.get_cmap("viridis").copy()
     cmap.set_under(cmap(0.0))
-    axes[0][0].imshow(show(read_pfm(ref)), interpolation="nearest")
+    axes[0][0].imshow(show(C.read_pfm(ref)), interpolation="nearest")
     axes[0][0].set_title(f"reference\ncanonical, {ref_spp} spp", fontsize=8)
     axes[1][0].axis("off")
     axes[1][0].text(0.5, 0.5, "error:\n(a − ref)² / (ref² + 0.01)\nmean over RGB,\nlog scale", ha="center",
