@@ -13,13 +13,6 @@
 
 namespace oblong {
 
-std::string memoryText(size_t bytes) {
-  if (bytes >= (size_t(1) << 30)) return fmt::format("{:.2f} GiB", double(bytes) / double(1 << 30));
-  if (bytes >= (size_t(1) << 20)) return fmt::format("{:.2f} MiB", double(bytes) / double(1 << 20));
-  if (bytes >= 1024) return fmt::format("{:.1f} KiB", double(bytes) / 1024.0);
-  return fmt::format("{} B", bytes);
-}
-
 size_t peakMemoryBytes() {
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
@@ -104,14 +97,14 @@ void printRenderSummary(const RenderReport& r) {
   fmt::print("oblong render: {} -> {}{}\n", r.scene.path, r.out, r.defaultOut ? " (the default name; -o chooses)" : "");
   if (const std::string d = b.deviceText(); !d.empty()) fmt::print("  device   : {}\n", d);
   fmt::print("  geometry : {}, built in {:.2f} s\n", b.geometryText(), b.buildSeconds());
-  for (const auto& m : mem) fmt::print("  memory   : {:<24} {}\n", m.name, memoryText(m.bytes));
+  for (const auto& m : mem) fmt::print("  memory   : {:<24} {}\n", m.name, humanBytes(m.bytes));
   fmt::print(
       "  summary  : {}x{} {} spp {}, {:.3f} s{}, {:.2f} Mrays/s ({} camera + {} secondary rays, {:.1f}% hit), "
       "{:.1f} steps/camera ray, {:.1f} steps/ray, memory {}, peak {}\n",
       o.size.x, o.size.y, o.spp, integratorName(o.integrator), res.seconds, res.tracingOnly ? " tracing" : "",
       mraysPerSecond(rays, res.seconds), res.primaryRays, res.secondaryRays,
       100.0 * double(res.hits) / double(std::max<int64_t>(1, res.primaryRays)), meanCameraSteps(res),
-      double(res.counters.steps()) / std::max(1.0, rays), memoryText(totalBytes(mem)), memoryText(peakMemoryBytes()));
+      double(res.counters.steps()) / std::max(1.0, rays), humanBytes(totalBytes(mem)), humanBytes(peakMemoryBytes()));
   if (res.partial)
     fmt::print("  partial  : interrupted; {} of {} pixels rendered (the rest is black)\n", res.pixelsDone,
                int64_t(o.size.x) * o.size.y);
@@ -162,7 +155,7 @@ void printTraceSummary(const TraceReport& r) {
   fmt::print("oblong trace: {} rays -> {}{}: {} hits, {}{}, {:.3f} s, {:.2f} Mrays/s, {:.1f} steps/ray, memory {}\n", n,
              r.out, r.defaultOut ? " (the default name; -o chooses)" : "", r.res.found, b.geometryName(),
              device.empty() ? "" : " on " + device, r.res.seconds, mraysPerSecond(double(n), r.res.seconds),
-             double(r.res.counters.steps()) / double(std::max<size_t>(1, n)), memoryText(totalBytes(b.memory())));
+             double(r.res.counters.steps()) / double(std::max<size_t>(1, n)), humanBytes(totalBytes(b.memory())));
 }
 
 nlohmann::json traceStats(const TraceReport& r, const RunInfo& run) {

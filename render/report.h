@@ -4,7 +4,7 @@
 // oblong render prints" and "--stats out.json").
 //
 // Memory, one convention on every device: the console prints bytes in binary units
-// (memoryText: "47.2 KiB", "3.88 MiB"), the statistics files hold integer bytes
+// (humanBytes, core/memory.h: "47.2 KiB", "3.88 MiB"), the statistics files hold integer bytes
 // ("memory": bytes per structure, "memory_total"; addMemoryJson).
 #pragma once
 
@@ -21,8 +21,6 @@
 
 namespace oblong {
 
-// Bytes for the console, in binary units: "980 B", "47.2 KiB", "3.88 MiB", "1.50 GiB".
-std::string memoryText(size_t bytes);
 // The process's peak resident memory (getrusage).
 size_t peakMemoryBytes();
 // The worker threads TBB runs with for --threads `requested` (0: all cores).

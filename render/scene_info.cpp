@@ -105,7 +105,7 @@ std::string infoValue(const std::string& key, const json& v) {
     for (const auto& e : v) s += (s.empty() ? "" : ", ") + infoValue(key, e);
     return "[" + s + "]";
   }
-  if (bytes && v.is_number_unsigned()) return memoryText(v.get<size_t>());
+  if (bytes && v.is_number_unsigned()) return humanBytes(v.get<size_t>());
   return v.is_string() ? v.get<std::string>() : v.dump();
 }
 
@@ -115,7 +115,7 @@ std::string infoValue(const std::string& key, const json& v) {
 void printTraversal(std::string& out, const json& d) {
   const json& rq = d.at("range");
   put(out, "      built    : {} ({}), {}\n", rq.at("exact").get<bool>() ? "exact bounds" : "conservative bounds",
-       infoValue("params", rq.at("params")), memoryText(rq.at("bytes").get<size_t>()));
+       infoValue("params", rq.at("params")), humanBytes(rq.at("bytes").get<size_t>()));
   if (rq.contains("layout"))
     for (const auto& [k, v] : rq.at("layout").items()) {
       if (k == "stores_wrap" || k == "wrap_bytes") continue;
@@ -176,14 +176,14 @@ std::string sceneInfoText(const json& info) {
          m.at("vertices").get<size_t>(), m.at("triangles").get<size_t>(),
          isDisplaced ? "displaced" : "plain (Embree triangles)");
     if (!isDisplaced) {
-      put(out, "    built    : no range query, no prisms ({})\n", memoryText(m.at("bytes").get<size_t>()));
+      put(out, "    built    : no range query, no prisms ({})\n", humanBytes(m.at("bytes").get<size_t>()));
       continue;
     }
     const json& map = m.at("map");
     const json& tiling = m.at("tiling");
     put(out, "    map {} ({}x{}), scale {}, bias {}, tiling ({}, {}), {}\n", map.at("name").get<std::string>(),
          map.at("width").get<int>(), map.at("height").get<int>(), f32(m.at("scale")), f32(m.at("bias")), f32(tiling[0]),
-         f32(tiling[1]), memoryText(map.at("bytes").get<size_t>()));
+         f32(tiling[1]), humanBytes(map.at("bytes").get<size_t>()));
     const json& needs = m.at("needs");
     const bool tiled = f32(tiling[0]) != 1.0f || f32(tiling[1]) != 1.0f;
     put(out, "    needs    : range queries up to {}x{} samples; wrapping queries {}\n", needs.at("max_extent")[0].get<int>(),
@@ -203,14 +203,14 @@ std::string sceneInfoText(const json& info) {
       put(out, "    LoD      : lod {}: level {} grid ({}x{} samples, {}) at the heights of lod {}; the {}x{} "
            "full-resolution map kept\n",
            f32(lod.at("lod")), lod.at("level").get<int>(), lod.at("grid")[0].get<int>(), lod.at("grid")[1].get<int>(),
-           memoryText(lod.at("grid_bytes").get<size_t>()), f32(lod.at("lod")),
+           humanBytes(lod.at("grid_bytes").get<size_t>()), f32(lod.at("lod")),
            lod.at("full_resolution")[0].get<int>(), lod.at("full_resolution")[1].get<int>());
     if (m.contains("tessellation")) {
       const json& e = m.at("tessellation");
       put(out, "    baseline '{}': no range query; {} micro-triangles: {} of vertices, uvs and indices, about {} "
            "of Embree BVH\n",
            m.at("baseline").get<std::string>(), e.at("micro_triangles").get<size_t>(),
-           memoryText(e.at("geometry_bytes").get<size_t>()), memoryText(e.at("bvh_bytes").get<size_t>()));
+           humanBytes(e.at("geometry_bytes").get<size_t>()), humanBytes(e.at("bvh_bytes").get<size_t>()));
       continue;
     }
     if (m.contains("traversal")) {
@@ -230,16 +230,16 @@ std::string sceneInfoText(const json& info) {
     std::string parts;
     for (const auto& item : m.at("memory"))
       parts += fmt::format("{}{} {}", parts.empty() ? "" : ", ", item.at("name").get<std::string>(),
-                           memoryText(item.at("bytes").get<size_t>()));
-    put(out, "    built    : {} = {}\n", parts, memoryText(m.at("memory_total").get<size_t>()));
+                           humanBytes(item.at("bytes").get<size_t>()));
+    put(out, "    built    : {} = {}\n", parts, humanBytes(m.at("memory_total").get<size_t>()));
   }
   const size_t displaced = info.at("displaced_meshes").get<size_t>();
   if (displaced == 0) put(out, "  no displaced mesh: no range query built\n");
   else
     put(out, "  total    : {} built for {} displaced mesh{} (plus Embree's BVH, reported by oblong render)\n",
-         memoryText(info.at("total_bytes").get<size_t>()), displaced, displaced == 1 ? "" : "es");
+         humanBytes(info.at("total_bytes").get<size_t>()), displaced, displaced == 1 ? "" : "es");
   put(out, "  peak     : {} of process memory (each structure above built once)\n",
-       memoryText(info.at("peak_memory").get<size_t>()));
+       humanBytes(info.at("peak_memory").get<size_t>()));
   return out;
 }
 
