@@ -100,6 +100,12 @@ if ! "${VK[@]}" --help >/dev/null 2>"$OUT/start_error.txt"; then
   VK=("$HERE/lib/glibc/ld-linux-x86-64.so.2" --library-path "$HERE/lib/glibc:${LD_LIBRARY_PATH:-$HERE/lib}" "$HERE/bin/oblong_vkbench")
   "${VK[@]}" --help >/dev/null || echo "run.sh: it does not start with the bundled glibc either"
 fi
+# A container's NVIDIA driver keeps its ICD manifest outside the loader's search path.
+if [ -z "${VK_ICD_FILENAMES:-}${VK_DRIVER_FILES:-}" ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ] &&
+   ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/share/vulkan/icd.d/*.json >/dev/null 2>&1; then
+  export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json VK_ICD_FILENAMES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+  echo "run.sh: using the driver's ICD manifest $VK_DRIVER_FILES"
+fi
 # NVIDIA's ICD manifest, when the driver is installed without one (CUDA-only images).
 if [ -z "${VK_ICD_FILENAMES:-}${VK_DRIVER_FILES:-}" ] &&
    ! ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/share/vulkan/icd.d/*.json >/dev/null 2>&1; then
