@@ -60,7 +60,7 @@ struct Scene {
   StrategyChoice baseline{"", nlohmann::json::object(), "<default>: strategies.baseline"};
   float marchingScale = 4.0f;        // texels: rectangles at most this size are marched
   bool inversionInTraversal = true;  // invert box intervals to tighten rectangles
-  int stackDepth = OBLONG_TRAV_STACK;  // entries of the traversal's stack it may use
+  int stackDepth = OBLONG_TRAV_STACK_DEFAULT;  // entries of the traversal's stack it may use
   // Level of detail (docs/lod.md): none = off (full resolution, nothing built), or one
   // λ >= 0 for the whole scene, clamped per map to its last level. The meshes'
   // displacements are already at it (setLod).

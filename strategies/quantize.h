@@ -7,6 +7,7 @@
 // min/max of codes is the code of the min/max: a structure can be built on codes.
 #pragma once
 
+#include "core/kernels/tfdm.h"
 #include "core/math.h"
 
 #include <algorithm>
@@ -112,10 +113,7 @@ template <typename T>
 using UninitVector = std::vector<T, UninitAllocator<T>>;
 
 // Union of two encoded pairs: min of the low codes, max of the high codes.
-inline uint32_t join16(uint32_t a, uint32_t b) {
-  const uint32_t lo = std::min(a & 0xffffu, b & 0xffffu), hi = std::max(a >> 16, b >> 16);
-  return lo | (hi << 16);
-}
+inline uint32_t join16(uint32_t a, uint32_t b) { return shared::joinCodes16(a, b); }
 constexpr uint32_t kEmpty16 = 0xffffu;
 
 }  // namespace oblong

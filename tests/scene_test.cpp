@@ -152,7 +152,7 @@ TEST_CASE("defaults: a scene with only a mesh", "[scene]") {
   CHECK(s.splitter.params.empty());
   CHECK(s.marchingScale == 4.0f);
   CHECK(s.inversionInTraversal);
-  CHECK(s.stackDepth == OBLONG_TRAV_STACK);
+  CHECK(s.stackDepth == OBLONG_TRAV_STACK_DEFAULT);
   REQUIRE(s.meshes.size() == 1);
   CHECK_FALSE(s.meshes[0].displacement);
   // Only some strategy keys: the others keep their defaults.

@@ -48,7 +48,7 @@ struct TraversalConfig {
   // a push beyond it marches (or tests cell by cell) instead, on the CPU and the GPU alike.
   // A bound on a shader's local memory to study, and how the tests reach the overflow
   // branch, which the full depth never meets.
-  int stackDepth = OBLONG_TRAV_STACK;
+  int stackDepth = OBLONG_TRAV_STACK_DEFAULT;
   // "" (the traversal above) or a registered baseline (BaselineRegistry below):
   // "bruteforce" (every micro-triangle of the prism's triangle: the oracle), "tfdm"
   // (Thonat et al. 2021's quad-tree traversal), "fixedstep" (PDM-style constant-step

@@ -99,7 +99,7 @@ inline bool split(const Split& s, const CurvePiece& p, Ctx& ctx, CurvePiece& f, 
 struct TraversalOptions {
   float marchingScale = 4.0f;
   bool inversionInTraversal = true;
-  int stackDepth = OBLONG_TRAV_STACK;  // entries used of kStack (TraversalConfig::stackDepth)
+  int stackDepth = OBLONG_TRAV_STACK_DEFAULT;  // entries used of kStack (TraversalConfig::stackDepth)
 };
 
 // One ray against one displaced triangle: the state of Alg. 1 and the splitters'

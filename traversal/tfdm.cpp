@@ -23,6 +23,7 @@
 #include "traversal/traversal.h"
 
 #include "core/error.h"
+#include "core/kernels/tfdm.h"
 #include "core/stats.h"
 #include "strategies/quantize.h"
 #include "traversal/closest_hit.h"
@@ -47,7 +48,6 @@ OBLONG_STAT_COUNTER("tfdm/MicroTriangles", tfMicroTris);
 
 namespace {
 
-int64_t floorDiv(int64_t a, int L) { return a >> L; }  // arithmetic shift: floor (C++20)
 int64_t wrap64(int64_t i, int64_t n) {
   const int64_t r = i % n;
   return r < 0 ? r + n : r;
@@ -93,6 +93,11 @@ class CellPyramid {
   }
 
   int storedTop() const { return int(dims_.size()) - 1; }
+  const std::vector<ivec2>& dims() const { return dims_; }
+  // Level L's stored words: one code pair per node (16 bits), or lo and hi floats (32).
+  const uint32_t* words(int L) const {
+    return bits_ == 16 ? codes_[L].data() : reinterpret_cast<const uint32_t*>(levels_[L].data());
+  }
   // True when a node of level L is answered by folding stored nodes.
   bool folds(int L) const {
     const int s = storedTop();
@@ -189,21 +194,20 @@ class CellPyramid {
 };
 
 // The roots of a triangle: the level at which its cell range spans at most two nodes
-// per axis, and those nodes.
+// per axis (core/kernels/tfdm.h), and those nodes.
 struct Roots {
   int level = 0;
-  int64_t x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
   static Roots of(const CellRange& c) {
     Roots r;
-    while (floorDiv(c.x1, r.level) - floorDiv(c.x0, r.level) > 1 || floorDiv(c.y1, r.level) - floorDiv(c.y0, r.level) > 1)
-      ++r.level;
-    r.x0 = floorDiv(c.x0, r.level), r.x1 = floorDiv(c.x1, r.level);
-    r.y0 = floorDiv(c.y0, r.level), r.y1 = floorDiv(c.y1, r.level);
+    r.level = shared::tfdmRootLevel(ivec2(c.x0, c.y0), ivec2(c.x1, c.y1));
+    r.x0 = c.x0 >> r.level, r.x1 = c.x1 >> r.level;
+    r.y0 = c.y0 >> r.level, r.y1 = c.y1 >> r.level;
     return r;
   }
 };
 
-class Tfdm final : public Intersector {
+class Tfdm final : public TfdmIntersector {
  public:
   Tfdm(TraversalMesh mesh, std::vector<Roots> roots, std::vector<TextureFrame> frames, std::unique_ptr<CellPyramid> pyr,
        int maxRootLevel, bool worldBoxes)
@@ -237,6 +241,19 @@ class Tfdm final : public Intersector {
     return j;
   }
 
+  TfdmView view() const override {
+    TfdmView v;
+    v.mesh = &mesh_;
+    v.bits = pyr_->bits();
+    v.base = pyr_->quantizer().base, v.step = pyr_->quantizer().step;
+    v.dims = pyr_->dims();
+    for (int L = 0; L <= pyr_->storedTop(); ++L) v.words.push_back(pyr_->words(L));
+    v.folds = pyr_->upper() == nullptr;
+    v.topLevel = maxRootLevel_;
+    v.worldBoxes = worldBoxes_;
+    return v;
+  }
+
   bool intersect(const Ray& r, uint32_t prim, TriangleHit& hit, RayCounters& c) const override {
     const PrismParams& P = mesh_.params[prim];
     if (!P.valid) return false;
@@ -262,8 +279,7 @@ class Tfdm final : public Intersector {
     // T's uv triangle in sample coordinates, with the inside sign of each edge.
     dvec2 S[3];
     for (int k = 0; k < 3; ++k) S[k] = d.toSample(T.t[k]);
-    const double orientT = (S[1].x - S[0].x) * (S[2].y - S[0].y) - (S[1].y - S[0].y) * (S[2].x - S[0].x);
-    const double sigma = orientT > 0 ? 1.0 : -1.0;
+    const double sigma = shared::tfdmSigma(S[0], S[1], S[2]);
     // Child order: the child nearest the ray's start first, by the signs of its
     // texture-space direction.
     const dvec2 dl = approxDirLocal(F, D);
@@ -271,16 +287,15 @@ class Tfdm final : public Intersector {
     const int order[4][2] = {{ax, ay}, {ax, 1 - ay}, {1 - ax, ay}, {1 - ax, 1 - ay}};
 
     struct Node {
-      int64_t x, y;
-      int level;
+      int x, y, level;
     };
-    constexpr int kStack = 4 * 64;
+    constexpr int kStack = OBLONG_TFDM_STACK;
     Node stack[kStack];
     int sp = 0;
     const Roots& R = roots_[prim];
     // Roots pushed so that the first in the fixed order is popped first.
     for (int k = 3; k >= 0; --k) {
-      const int64_t x = order[k][0] ? R.x1 : R.x0, y = order[k][1] ? R.y1 : R.y0;
+      const int x = order[k][0] ? R.x1 : R.x0, y = order[k][1] ? R.y1 : R.y0;
       if (k > 0) {  // roots repeat when the triangle spans one node on an axis
         bool dup = false;
         for (int q = 0; q < k; ++q)
@@ -298,10 +313,10 @@ class Tfdm final : public Intersector {
     while (sp > 0) {
       const Node n = stack[--sp];
       // The node's cells within T's cell range.
-      const int64_t cx0 = std::max<int64_t>(n.x << n.level, cr.x0), cx1 = std::min<int64_t>(((n.x + 1) << n.level) - 1, cr.x1);
-      const int64_t cy0 = std::max<int64_t>(n.y << n.level, cr.y0), cy1 = std::min<int64_t>(((n.y + 1) << n.level) - 1, cr.y1);
-      if (cx0 > cx1 || cy0 > cy1) continue;
-      if (outsideTriangle(S, sigma, double(cx0), double(cy0), double(cx1 + 1), double(cy1 + 1))) {
+      ivec2 clo, chi;
+      if (!shared::tfdmNodeCells(n.x, n.y, n.level, ivec2(cr.x0, cr.y0), ivec2(cr.x1, cr.y1), clo, chi)) continue;
+      const int cx0 = clo.x, cy0 = clo.y, cx1 = chi.x, cy1 = chi.y;
+      if (shared::tfdmOutside(S[0], S[1], S[2], sigma, double(cx0), double(cy0), double(cx1 + 1), double(cy1 + 1))) {
         OBLONG_STAT_INC(tfOutside);
         continue;
       }
@@ -322,12 +337,12 @@ class Tfdm final : public Intersector {
           cellsReady = true;
         }
         MicroTriangle buf[MicroCells::kMaxPerCell];
-        const int k = reinterpret_cast<const MicroCells*>(mcRaw)->cell(int(n.x), int(n.y), buf);
+        const int k = reinterpret_cast<const MicroCells*>(mcRaw)->cell(n.x, n.y, buf);
         local.microTriangles += k;
         for (int q = 0; q < k; ++q) best.test(wr, buf[q], r.tmin, r.tmax);
         continue;
       }
-      if (sp + 4 > kStack) fail("tfdm", "traversal stack overflow at level {}", n.level);  // cannot happen: depth ≤ 62
+      if (sp + 4 > kStack) fail("tfdm", "traversal stack overflow at level {}", n.level);  // cannot happen: depth ≤ 94
       for (int k = 3; k >= 0; --k)
         stack[sp++] = {2 * n.x + order[k][0], 2 * n.y + order[k][1], n.level - 1};
     }
@@ -342,26 +357,6 @@ class Tfdm final : public Intersector {
   }
 
  private:
-  // True when the square [x0, x1] × [y0, y1] (sample coordinates) lies strictly outside
-  // one edge of T's uv triangle, by more than rounding: its cells' micro-triangles are
-  // then empty (a square touching T only along a line gives degenerate pieces, which no
-  // ray hits).
-  static bool outsideTriangle(const dvec2 S[3], double sigma, double x0, double y0, double x1, double y1) {
-    const double mag = 1 + std::max({std::abs(x0), std::abs(x1), std::abs(y0), std::abs(y1)});
-    for (int e = 0; e < 3; ++e) {
-      const dvec2 a = S[e], b = S[(e + 1) % 3], ab = b - a;
-      const double tol = 1e-9 * (std::abs(ab.x) + std::abs(ab.y)) * mag;
-      bool allOut = true;
-      for (const dvec2 p : {dvec2(x0, y0), dvec2(x1, y0), dvec2(x0, y1), dvec2(x1, y1)})
-        if (sigma * (ab.x * (p.y - a.y) - ab.y * (p.x - a.x)) >= -tol) {
-          allOut = false;
-          break;
-        }
-      if (allOut) return true;
-    }
-    return false;
-  }
-
   TraversalMesh mesh_;
   std::vector<Roots> roots_;
   std::vector<TextureFrame> texFrames_;
@@ -384,7 +379,14 @@ std::unique_ptr<Intersector> makeTfdm(ParamSet& params, const BaselineContext& c
   int top = 0;
   for (size_t i = 0; i < tris.size(); ++i) {
     if (tris[i].uvArea2 == 0.0f) continue;
-    roots[i] = Roots::of(cellsOverlapping(tris[i], disp));
+    const CellRange c = cellsOverlapping(tris[i], disp);
+    // The kernels' cell indices are ints with room for a node's far side.
+    constexpr int kMaxCell = 1 << 29;
+    if (std::max({std::abs(c.x0), std::abs(c.y0), std::abs(c.x1), std::abs(c.y1)}) > kMaxCell)
+      fail(params.where(), "triangle {}'s texels reach cell {} (tiling {}x{}), beyond the {} tfdm indexes", i,
+           std::max({std::abs(c.x0), std::abs(c.y0), std::abs(c.x1), std::abs(c.y1)}), disp.tiling.x, disp.tiling.y,
+           kMaxCell);
+    roots[i] = Roots::of(c);
     top = std::max(top, roots[i].level);
     boxes.push_back(tris[i].uvBox);
   }

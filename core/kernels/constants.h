@@ -25,8 +25,21 @@
 
 // Entries of the per-ray, per-prism stack of pieces / box ranges (RayPatch::kStack). A push
 // that would overflow marches (or tests the cells of) the current piece instead: correct,
-// just not hierarchical. Fixed-size so that RayPatch allocates nothing.
+// just not hierarchical. Fixed-size so that RayPatch allocates nothing. OBLONG_TRAV_STACK
+// is the CPU's array and the largest `stack_depth` a scene may ask for; the default uses
+// OBLONG_TRAV_STACK_DEFAULT entries, which no ray of the paper-scale suite or the asteroid
+// fills (0 overflows at 16, path-traced); the shaders' array holds OBLONG_TRAV_STACK_GPU
+// entries (about 120 bytes each, in each invocation's local memory: 128 of them made
+// every trace on an H200 lose the device, docs/vulkan.md), and the Vulkan path refuses a
+// deeper stack_depth instead of running a different traversal.
 #define OBLONG_TRAV_STACK 128
+#define OBLONG_TRAV_STACK_DEFAULT 32
+#define OBLONG_TRAV_STACK_GPU 32
+
+// Entries of the tfdm baseline's node stack (traversal/tfdm.cpp, shaders/tfdm.glsl): at
+// most 4 roots plus 3 per level descended, and a root level is at most 30 (cell indices
+// within ±2^29).
+#define OBLONG_TFDM_STACK 96
 
 // Rounding of the watertight micro-triangle test, relative to the magnitudes it works on
 // (RayMargins::make: rayErr = this · (max|p| + max|o| + |a| + |b|), a few float ulps of

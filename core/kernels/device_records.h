@@ -145,7 +145,17 @@ struct MeshGpu {
   // Always 0 (the record is zero-initialised): prism.rint rounds the ray into the frame
   // through it, a value the shader compiler cannot see.
   int zero;
+  // The intersector this record was built for: OBLONG_METHOD_CANONICAL (the rmip* fields
+  // are its Rmip) or OBLONG_METHOD_TFDM (the rmip* fields hold tfdm's min-max pyramid:
+  // rmipLayers one row per stored level, rmipBits, rmipBase and rmipStep its codes;
+  // tfStored the number of stored levels).
+  int method;
+  int tfStored;
+  int pad1;
 };
+
+#define OBLONG_METHOD_CANONICAL 0
+#define OBLONG_METHOD_TFDM 1
 
 // Intersection -> closest-hit attributes (displaced prisms).
 struct HitAttrGpu {

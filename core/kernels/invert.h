@@ -25,6 +25,8 @@ OBLONG_KERNELS_BEGIN
 #define KFINITE finiteF
 #define KCOPYSIGN copysignF
 #define KCBRT cbrtF
+#define KDIV divF
+#define KSQRT sqrtF
 #define K_DROP_EPS OBLONG_CUBIC_DROP_EPS_F
 #define K_ROOT_TOL OBLONG_CUBIC_ROOT_TOL_F
 #define K_TIE_EPS OBLONG_CUBIC_TIE_EPS_F
@@ -43,6 +45,8 @@ OBLONG_KERNELS_BEGIN
 #define KFINITE finiteD
 #define KCOPYSIGN copysignD
 #define KCBRT cbrtD
+#define KDIV(a, b) ((a) / (b))
+#define KSQRT sqrt
 #define K_DROP_EPS OBLONG_CUBIC_DROP_EPS_D
 #define K_ROOT_TOL OBLONG_CUBIC_ROOT_TOL_D
 #define K_TIE_EPS OBLONG_CUBIC_TIE_EPS_D

@@ -3,6 +3,7 @@
 //   KS, KS3       the scalar and its 3-vector (float, vec3 / double, dvec3)
 //   KFrame, KCubic, KResult  the struct names of this scalar
 //   KDOT, KCROSS, KLENGTH, KFINITE, KCOPYSIGN, KCBRT  its vector and scalar functions
+//   KDIV, KSQRT   its quotient and square root (float: lang.h's divF, sqrtF)
 //   K_DROP_EPS, K_ROOT_TOL, K_TIE_EPS, K_OUTSIDE_EPS  its precision-dependent constants
 // No include guard: it is meant to be included more than once, and it undefines those
 // names at its end. Every literal is written
@@ -26,7 +27,7 @@ OBLONG_INLINE KFrame invFrame(OBLONG_IN(KS3) p0, OBLONG_IN(KS3) p1, OBLONG_IN(KS
   F.f2 = n2 - n0;
   OBLONG_PRECISE KS3 e3 = F.e2 - F.e1;
   OBLONG_PRECISE KS l2 = max(max(KDOT(F.e1, F.e1), KDOT(F.e2, F.e2)), KDOT(e3, e3));
-  F.L = sqrt(l2);
+  F.L = KSQRT(l2);
   return F;
 }
 
@@ -77,7 +78,7 @@ OBLONG_FORCE_INLINE bool newtonStep(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) W, OBLON
   KS3 bxN = KCROSS(b, N);
   KS D = KDOT(a, bxN);
   if (!(abs(D) > KS(0))) return false;
-  OBLONG_PRECISE KS inv = KS(1) / D;
+  OBLONG_PRECISE KS inv = KDIV(KS(1), D);
   OBLONG_PRECISE KS su = -KDOT(r, bxN) * inv;
   OBLONG_PRECISE KS sv = -KDOT(a, KCROSS(r, N)) * inv;
   OBLONG_PRECISE KS ss = -KDOT(a, KCROSS(b, r)) * inv;
@@ -108,7 +109,7 @@ struct KCubic {
 
 OBLONG_INLINE KCubic cubicOf(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) W) {
   KCubic C;
-  OBLONG_PRECISE KS iL = KS(1) / F.L;
+  OBLONG_PRECISE KS iL = KDIV(KS(1), F.L);
   C.e1 = F.e1 * iL;
   C.e2 = F.e2 * iL;
   C.w = W * iL;
@@ -128,7 +129,7 @@ OBLONG_INLINE KS polishPolyRoot(KS a0, KS a1, KS a2, KS a3, KS x) {
   for (int k = 0; k < 2; ++k) {
     OBLONG_PRECISE KS df = (KS(3) * a3 * x + KS(2) * a2) * x + a1;
     if (!(abs(df) > KS(0))) break;
-    OBLONG_PRECISE KS nx = x - f / df;
+    OBLONG_PRECISE KS nx = x - KDIV(f, df);
     OBLONG_PRECISE KS nf = ((a3 * nx + a2) * nx + a1) * nx + a0;
     if (!(abs(nf) < abs(f))) break;
     x = nx;
@@ -145,13 +146,13 @@ OBLONG_INLINE int quadRoots(KS c0, KS c1, KS c2, OBLONG_INOUT(KS) x0, OBLONG_INO
   OBLONG_PRECISE KS lim = -KS(16) * KS(K_DROP_EPS) * (c1 * c1 + abs(KS(4) * c2 * c0));
   if (D < KS(0) && D > lim) D = KS(0);
   if (!(D >= KS(0))) return 0;
-  OBLONG_PRECISE KS q = KS(-0.5) * (c1 + KCOPYSIGN(sqrt(D), c1));
+  OBLONG_PRECISE KS q = KS(-0.5) * (c1 + KCOPYSIGN(KSQRT(D), c1));
   if (q == KS(0)) {  // c1 = 0 and D = 0: double root at 0
     x0 = KS(0);
     return 1;
   }
-  x0 = q / c2;
-  x1 = c0 / q;
+  x0 = KDIV(q, c2);
+  x1 = KDIV(c0, q);
   return 2;
 }
 
@@ -167,7 +168,7 @@ OBLONG_INLINE int polyRoots(KS a0, KS a1, KS a2, KS a3, OBLONG_OUT_ARRAY KS x[3]
   if (!(M > KS(0)) || !KFINITE(M)) return 0;
   // A leading coefficient is dropped when the root it adds is beyond 1/eps: all of
   // |a_{k-1}/a_k|, |a_{k-2}/a_k|^(1/2), ... exceed 1/eps.
-  OBLONG_PRECISE KS big = KS(1) / KS(K_DROP_EPS);
+  OBLONG_PRECISE KS big = KDIV(KS(1), KS(K_DROP_EPS));
   OBLONG_PRECISE KS big2 = big * big;
   OBLONG_PRECISE KS big3 = big2 * big;
   bool cubic = abs(a2) < big * abs(a3) || abs(a1) < big2 * abs(a3) || abs(a0) < big3 * abs(a3);
@@ -177,25 +178,25 @@ OBLONG_INLINE int polyRoots(KS a0, KS a1, KS a2, KS a3, OBLONG_OUT_ARRAY KS x[3]
   int m = 0;
   if (cubic) {
     degree = 3;
-    OBLONG_PRECISE KS A = a2 / a3;
-    OBLONG_PRECISE KS B = a1 / a3;
-    OBLONG_PRECISE KS C = a0 / a3;
-    OBLONG_PRECISE KS A3 = A / KS(3);
+    OBLONG_PRECISE KS A = KDIV(a2, a3);
+    OBLONG_PRECISE KS B = KDIV(a1, a3);
+    OBLONG_PRECISE KS C = KDIV(a0, a3);
+    OBLONG_PRECISE KS A3 = KDIV(A, KS(3));
     OBLONG_PRECISE KS p = B - A * A3;
     OBLONG_PRECISE KS q = KS(2) * A3 * A3 * A3 - A3 * B + C;
-    OBLONG_PRECISE KS D = q * q / KS(4) + p * p * p / KS(27);
+    OBLONG_PRECISE KS D = KDIV(q * q, KS(4)) + KDIV(p * p * p, KS(27));
     OBLONG_PRECISE KS r;
     if (D > KS(0)) {
-      OBLONG_PRECISE KS w = -q / KS(2) - KCOPYSIGN(sqrt(D), q);
+      OBLONG_PRECISE KS w = KDIV(-q, KS(2)) - KCOPYSIGN(KSQRT(D), q);
       OBLONG_PRECISE KS t = KCBRT(w);
-      OBLONG_PRECISE KS tt = t != KS(0) ? t - p / (KS(3) * t) : KS(0);
+      OBLONG_PRECISE KS tt = t != KS(0) ? t - KDIV(p, KS(3) * t) : KS(0);
       r = tt - A3;
     } else if (p == KS(0)) {
       r = -A3;
     } else {
-      OBLONG_PRECISE KS rr = sqrt(-p / KS(3));
-      OBLONG_PRECISE KS c = clamp(KS(3) * q / (KS(2) * p) * sqrt(KS(-3) / p), KS(-1), KS(1));
-      OBLONG_PRECISE KS phi = acos(c) / KS(3);
+      OBLONG_PRECISE KS rr = KSQRT(KDIV(-p, KS(3)));
+      OBLONG_PRECISE KS c = clamp(KDIV(KS(3) * q, KS(2) * p) * KSQRT(KDIV(KS(-3), p)), KS(-1), KS(1));
+      OBLONG_PRECISE KS phi = KDIV(acos(c), KS(3));
       r = KS(0);
       for (int k = 0; k < 3; ++k) {
         OBLONG_PRECISE KS t = KS(2) * rr * cos(phi - KS(k) * KS(OBLONG_TWO_PI_OVER_3)) - A3;
@@ -208,7 +209,7 @@ OBLONG_INLINE int polyRoots(KS a0, KS a1, KS a2, KS a3, OBLONG_OUT_ARRAY KS x[3]
     OBLONG_PRECISE KS b2 = a2 + a3 * r;  // synthetic division from the top: a3 x² + b2 x + b1
     if (r != KS(0) && abs(r) * r * r * abs(a3) >= abs(a0)) {
       // r is the largest root: deflate from the bottom (keeps small roots accurate).
-      OBLONG_PRECISE KS c1 = -(a1 + a0 / r);
+      OBLONG_PRECISE KS c1 = -(a1 + KDIV(a0, r));
       m = quadRoots(-a0, c1, a3 * r, y0, y1);
     } else {
       OBLONG_PRECISE KS c0 = a1 + r * b2;
@@ -219,7 +220,7 @@ OBLONG_INLINE int polyRoots(KS a0, KS a1, KS a2, KS a3, OBLONG_OUT_ARRAY KS x[3]
     m = quadRoots(a0, a1, a2, y0, y1);
   } else if (abs(a1) > KS(K_DROP_EPS) * M) {
     degree = 1;
-    x[n++] = polishPolyRoot(a0, a1, a2, a3, -a0 / a1);
+    x[n++] = polishPolyRoot(a0, a1, a2, a3, KDIV(-a0, a1));
   }
   if (m > 0) x[n++] = polishPolyRoot(a0, a1, a2, a3, y0);
   if (m > 1) x[n++] = polishPolyRoot(a0, a1, a2, a3, y1);
@@ -247,8 +248,8 @@ OBLONG_INLINE bool offsetBary(OBLONG_IN(KFrame) F, OBLONG_IN(KCubic) C, KS sg, O
   KS3 nS = KCROSS(A, B);
   KS d = KDOT(nS, nS);
   if (!(d > KS(0))) return false;
-  OBLONG_PRECISE KS cu = KDOT(KCROSS(R, B), nS) / d;
-  OBLONG_PRECISE KS cv = KDOT(KCROSS(A, R), nS) / d;
+  OBLONG_PRECISE KS cu = KDIV(KDOT(KCROSS(R, B), nS), d);
+  OBLONG_PRECISE KS cv = KDIV(KDOT(KCROSS(A, R), nS), d);
   if (!KFINITE(cu) || !KFINITE(cv)) return false;
   u = cu;
   v = cv;
@@ -292,7 +293,7 @@ OBLONG_INLINE bool cubicRoot(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) W, OBLONG_OUT(K
 OBLONG_INLINE KResult cubicSolve(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) X, int polish, OBLONG_OUT(int) degree) {
   OBLONG_PRECISE KS3 W = X - F.p0;
   KS u, v, s;
-  if (!cubicRoot(F, W, u, v, s, degree)) return invFinish(F, KS(1) / KS(3), KS(1) / KS(3), KS(0), false, 0);
+  if (!cubicRoot(F, W, u, v, s, degree)) return invFinish(F, KDIV(KS(1), KS(3)), KDIV(KS(1), KS(3)), KS(0), false, 0);
   int it = 0;
   for (; it < polish; ++it) {
     KS du, dv, ds;
@@ -312,7 +313,7 @@ OBLONG_INLINE KResult newtonSolve(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) X, KS tol,
                                   OBLONG_OUT(bool) fellBack) {
   fellBack = false;
   OBLONG_PRECISE KS3 W = X - F.p0;
-  KS u = KS(1) / KS(3), v = KS(1) / KS(3), s = KS(0);
+  KS u = KDIV(KS(1), KS(3)), v = KDIV(KS(1), KS(3)), s = KS(0);
   bool conv = false;
   int it = 0, newtonIt = 0;
   for (int pass = 0; pass < 2; ++pass) {
@@ -325,7 +326,7 @@ OBLONG_INLINE KResult newtonSolve(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) X, KS tol,
       newtonIt = it;
       it = 0;
       int degree;
-      if (!cubicRoot(F, W, u, v, s, degree)) return invFinish(F, KS(1) / KS(3), KS(1) / KS(3), KS(0), false, newtonIt);
+      if (!cubicRoot(F, W, u, v, s, degree)) return invFinish(F, KDIV(KS(1), KS(3)), KDIV(KS(1), KS(3)), KS(0), false, newtonIt);
       conv = true;
     }
     int steps = pass == 0 ? maxIt : polish;
@@ -343,6 +344,8 @@ OBLONG_INLINE KResult newtonSolve(OBLONG_IN(KFrame) F, OBLONG_IN(KS3) X, KS tol,
 }
 
 #undef KS
+#undef KDIV
+#undef KSQRT
 #undef KS3
 #undef KFrame
 #undef KCubic

@@ -20,7 +20,9 @@
 //                   (with the functions the kernel calls on them)
 // min, max and abs are GLSL's on both sides (for scalars: y < x ? y : x, as std::min);
 // dotD, crossD, dotF, crossF (and lengthD, lengthF) are glm's formulas, which GLSL's
-// built-ins need not follow; cbrtF is std::cbrt on the CPU and pow on the GPU. An
+// built-ins need not follow; cbrtF is std::cbrt on the CPU and pow on the GPU. A float
+// quotient or square root is written divF(a, b) / sqrtF(x): correctly rounded on both
+// sides (GLSL's float `/` and sqrt are not, on every GPU). An
 // unsuffixed literal is a float in GLSL and a double in C++; glslang folds its conversion
 // to double from the literal's own double value, so in double expressions both sides use
 // the same constants. Float arithmetic takes the f suffix (1.0f), read as a float by both
@@ -79,6 +81,8 @@ inline float dotF(const vec3& a, const vec3& b) { return a.x * b.x + a.y * b.y +
 inline vec3 crossF(const vec3& x, const vec3& y) {
   return vec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
 }
+inline float divF(float a, float b) { return a / b; }
+inline float sqrtF(float x) { return std::sqrt(x); }
 inline float lengthF(const vec3& v) { return std::sqrt(dotF(v, v)); }
 inline double dotD(const dvec3& a, const dvec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline dvec3 crossD(const dvec3& x, const dvec3& y) {
@@ -144,10 +148,49 @@ vec3 crossF(vec3 x, vec3 y) {
   precise vec3 r = vec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
   return r;
 }
-float lengthF(vec3 v) {
-  precise float r = sqrt(dotF(v, v));
+// Float quotients and square roots, correctly rounded as IEEE (and the CPU) has them:
+// a GPU's float `/` and sqrt need not be (Vulkan allows 2.5 ulp, NVIDIA's differ from the
+// CPU's), and a detour through double does not help (lavapipe's double quotient rounded
+// to float differs from the float quotient). The GPU's result q is corrected against the
+// midpoints to its float neighbours, m = (q + q±) / 2: m·b and m·m are exact in double
+// (25 + 24 and 25 + 25 bits), so each comparison is exact; ties go to the even neighbour.
+float nextUpF(float x) { return uintBitsToFloat(floatBitsToUint(x) + 1u); }    // x > 0, finite
+float nextDownF(float x) { return uintBitsToFloat(floatBitsToUint(x) - 1u); }  // x > 0
+float divF(float a, float b) {
+  precise float q = a / b;
+  if (a == 0.0f || isinf(a) || isnan(a) || b == 0.0f || isinf(b) || isnan(b) || q == 0.0f || isinf(q)) return q;
+  precise double A = abs(double(a)), B = abs(double(b));
+  float r = abs(q);
+  for (int it = 0; it < 4; ++it) {
+    float dn = nextDownF(r), up = nextUpF(r);
+    precise double lo = (double(r) + double(dn)) * 0.5, hi = (double(r) + double(up)) * 0.5;
+    precise double loB = lo * B, hiB = hi * B;
+    if (A < loB) r = dn;
+    else if (A > hiB) r = up;
+    else {
+      if (A == loB && (floatBitsToUint(r) & 1u) != 0u) r = dn;
+      else if (A == hiB && (floatBitsToUint(r) & 1u) != 0u) r = up;
+      break;
+    }
+  }
+  return (a < 0.0f) != (b < 0.0f) ? -r : r;
+}
+float sqrtF(float x) {
+  precise float q = sqrt(x);
+  if (!(x > 0.0f) || isinf(x) || q == 0.0f) return q;
+  precise double X = double(x);
+  float r = q;
+  for (int it = 0; it < 4; ++it) {
+    float dn = nextDownF(r), up = nextUpF(r);
+    precise double lo = (double(r) + double(dn)) * 0.5, hi = (double(r) + double(up)) * 0.5;
+    precise double lo2 = lo * lo, hi2 = hi * hi;
+    if (X < lo2) r = dn;
+    else if (X > hi2) r = up;
+    else break;  // no float lies on a midpoint's square: no ties
+  }
   return r;
 }
+float lengthF(vec3 v) { return sqrtF(dotF(v, v)); }
 
 #endif
 

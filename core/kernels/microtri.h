@@ -43,7 +43,7 @@ OBLONG_INLINE WatertightRay makeWatertightRay(OBLONG_IN(vec3) o, OBLONG_IN(vec3)
     R.kx = R.ky;
     R.ky = s;
   }
-  OBLONG_PRECISE float sx = -d[R.kx] / d[R.kz], sy = -d[R.ky] / d[R.kz];
+  OBLONG_PRECISE float sx = divF(-d[R.kx], d[R.kz]), sy = divF(-d[R.ky], d[R.kz]);
   R.Sx = sx;
   R.Sy = sy;
   return R;
@@ -100,7 +100,7 @@ OBLONG_FORCE_INLINE bool intersectSheared(OBLONG_IN(WatertightRay) R, OBLONG_IN(
   if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return false;
   OBLONG_PRECISE float det = U + V + W;
   if (det == 0.0f) return false;
-  OBLONG_PRECISE float inv = 1.0f / det;
+  OBLONG_PRECISE float inv = divF(1.0f, det);
   float t = planeT(R, p0, p1, p2);
   if (!(t >= tmin && t <= tmax)) return false;
   ht = t;

@@ -21,7 +21,7 @@
 
 namespace oblong::vk {
 
-inline constexpr uint32_t kBakeVersion = 8;  // 8: the micro-cells' edges computed by the shaders (core/kernels/microcells.h); 7: MeshGpu::stackDepth; 6: boxes in the texture frame (TriGpu::texAxis, ...)
+inline constexpr uint32_t kBakeVersion = 9;  // 9: tfdm (MeshGpu::method, tfStored); 8: the micro-cells' edges computed by the shaders (core/kernels/microcells.h); 7: MeshGpu::stackDepth; 6: boxes in the texture frame (TriGpu::texAxis, ...)
 
 struct BakedScene {
   GpuRecords records;

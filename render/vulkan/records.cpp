@@ -21,9 +21,11 @@ using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1424 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 160 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 176 && sizeof(PushGpu) == 16);
 
 namespace {
+
+void appendTriangles(GpuRecords& R, MeshGpu& m, const TraversalMesh& tm, const Intersector& boxes, const Mesh& mesh);
 
 // The GPU record of one displaced triangle from the CPU's TraversalMesh.
 TriGpu makeTri(const TraversalMesh& tm, size_t i) {
@@ -81,7 +83,6 @@ void appendTraversal(GpuRecords& R, MeshGpu& m, const Intersector& is, const Int
   const TraversalMesh& tm = trav->mesh();
   const Displacement& d = tm.disp;
   m.triOffset = uint32_t(R.tris.size());
-  m.texelOffset = uint32_t(R.texels.size());
   m.W = d.map->width(), m.H = d.map->height();
   m.sampleOffset = float(d.sampleOffset);  // 2^-(k+1): exact in float
   // A band of a λ per ray reads its own level's structure (and the next level's, which
@@ -98,6 +99,49 @@ void appendTraversal(GpuRecords& R, MeshGpu& m, const Intersector& is, const Int
   R.rmipData.insert(R.rmipData.end(), L.words.begin(), L.words.end());
   R.rmipLayers.insert(R.rmipLayers.end(), L.layers.begin(), L.layers.end());
   R.rmipBytes += L.bytes();
+  appendTriangles(R, m, tm, boxes, mesh);
+}
+
+// The "tfdm" baseline's records: its map's texels, its min-max pyramid as the CPU stores
+// it (in the RMIP buffers: one layer-table row per level, MeshGpu::method), its
+// triangles and their boxes.
+void appendTfdm(GpuRecords& R, MeshGpu& m, const Intersector& is, const Mesh& mesh) {
+  const auto* tf = dynamic_cast<const TfdmIntersector*>(&is);
+  if (!tf) fail("--device vulkan", "internal: the tfdm intersector has no view");
+  const TfdmView v = tf->view();
+  const TraversalMesh& tm = *v.mesh;
+  if (v.worldBoxes) fail("--device vulkan", "runs tfdm with boxes in the texture frame only (asked for boxes: world)");
+  if (!v.folds)
+    fail("--device vulkan",
+         "runs tfdm only where a node above the stored levels is the union of at most 64 stored nodes; this {}x{} "
+         "map stores levels 0..{} and its triangles' roots reach level {}, which the CPU answers with a "
+         "minmax_mipmap",
+         tm.disp.map->width(), tm.disp.map->height(), v.dims.size() - 1, v.topLevel);
+  m.method = OBLONG_METHOD_TFDM;
+  m.triOffset = uint32_t(R.tris.size());
+  m.W = tm.disp.map->width(), m.H = tm.disp.map->height();
+  m.sampleOffset = float(tm.disp.sampleOffset);
+  m.rmipData = uint32_t(R.rmipData.size());
+  m.rmipLayers = uint32_t(R.rmipLayers.size());
+  m.rmipBits = v.bits, m.rmipBase = v.base, m.rmipStep = v.step;
+  m.tfStored = int(v.dims.size());
+  const size_t perNode = v.bits == 16 ? 1 : 2;
+  size_t first = 0;
+  for (size_t L = 0; L < v.dims.size(); ++L) {
+    const size_t nodes = size_t(v.dims[L].x) * size_t(v.dims[L].y);
+    R.rmipLayers.push_back(glm::ivec4(int(first), v.dims[L].x, v.dims[L].y, 0));
+    R.rmipData.insert(R.rmipData.end(), v.words[L], v.words[L] + nodes * perNode);
+    first += nodes;
+  }
+  if (first > size_t(INT32_MAX)) fail("--device vulkan", "tfdm's pyramid exceeds the 32-bit offsets of the GPU layout");
+  R.rmipBytes += first * perNode * sizeof(uint32_t);
+  appendTriangles(R, m, tm, is, mesh);
+}
+
+// Appends the map's texels and the triangles of `tm` with their boxes from `boxes`.
+void appendTriangles(GpuRecords& R, MeshGpu& m, const TraversalMesh& tm, const Intersector& boxes, const Mesh& mesh) {
+  const Displacement& d = tm.disp;
+  m.texelOffset = uint32_t(R.texels.size());
   R.texels.insert(R.texels.end(), d.map->texels().begin(), d.map->texels().end());
   R.texelBytes += d.map->bytes();
   for (size_t ti = 0; ti < tm.tris.size(); ++ti) {
@@ -124,12 +168,14 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
   GpuRecords R;
   if (describe) *describe = nlohmann::json::array();
   const TraversalConfig& cfg = opts.traversal;
-  if (!cfg.baseline.empty()) fail("--device vulkan", "runs the traversal only, not --baseline {}", cfg.baseline);
-  if (cfg.range != "rmip" || cfg.inverter != "newton" || cfg.splitter != "midpoint2d")
+  const bool tfdm = cfg.baseline == "tfdm";
+  if (!cfg.baseline.empty() && !tfdm)
+    fail("--device vulkan", "runs the traversal and --baseline tfdm only, not --baseline {}", cfg.baseline);
+  if (!tfdm && (cfg.range != "rmip" || cfg.inverter != "newton" || cfg.splitter != "midpoint2d"))
     fail("--device vulkan", "runs the canonical configuration rmip+newton+midpoint2d only (asked for {}+{}+{})",
          cfg.range, cfg.inverter, cfg.splitter);
   // The shader's Newton is the default one (float, tolerance 1e-5, 10 iterations).
-  if (!cfg.inverterParams.empty())
+  if (!tfdm && !cfg.inverterParams.empty())
     fail("--device vulkan", "runs newton with its default parameters only (asked for {})", cfg.inverterParams.dump());
 
   // Host-side records, built with the CPU's own code (createIntersector).
@@ -175,6 +221,9 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
     m.scale = d.scale, m.bias = d.bias, m.tiling = d.tiling;
     m.marchingScale = cfg.marchingScale;
     m.inversionInTraversal = cfg.inversionInTraversal;
+    if (cfg.stackDepth > OBLONG_TRAV_STACK_GPU)
+      fail("--device vulkan", "strategies.stack_depth {} is deeper than the shaders' stack ({} entries)", cfg.stackDepth,
+           OBLONG_TRAV_STACK_GPU);
     m.stackDepth = cfg.stackDepth;
     m.lodNext = -1;
     if (const auto* perRay = dynamic_cast<const PerRayLod*>(is.get())) {
@@ -193,6 +242,8 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
       }
       m = levels[first - scene.meshes.size()];
       m.lodLevels = int(K + 1), m.lodFirst = first, m.lodNext = -1;
+    } else if (tfdm) {
+      appendTfdm(R, m, *is, mesh);
     } else {
       appendTraversal(R, m, *is, *is, mesh);
     }

@@ -26,7 +26,7 @@ using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
 static_assert(sizeof(TriGpu) == 1424 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
-static_assert(sizeof(MeshGpu) == 160 && sizeof(PushGpu) == 16);
+static_assert(sizeof(MeshGpu) == 176 && sizeof(PushGpu) == 16);
 static_assert(sizeof(AabbGpu) == sizeof(VkAabbPositionsKHR) && offsetof(VkAabbPositionsKHR, maxX) == 12,
               "AabbGpu mirrors VkAabbPositionsKHR: the AABB buffer is copied as is");
 
@@ -41,6 +41,9 @@ const uint32_t kMiss[] = {
 };
 const uint32_t kRint[] = {
 #include "prism.rint.inc"
+};
+const uint32_t kTfdmRint[] = {
+#include "tfdm.rint.inc"
 };
 const uint32_t kPrismHit[] = {
 #include "prism.rchit.inc"
@@ -417,7 +420,8 @@ struct Device {
     return m;
   }
 
-  void createPipeline() {
+  // tfdm: the intersection shader of the tfdm baseline (tfdm.rint) instead of prism.rint.
+  void createPipeline(bool tfdm) {
     const VkShaderStageFlags all = VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
                                    VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR;
     std::vector<VkDescriptorSetLayoutBinding> binds(OBLONG_BIND_COUNT);
@@ -459,7 +463,8 @@ struct Device {
     };
     const Stage st[5] = {{VK_SHADER_STAGE_RAYGEN_BIT_KHR, kRgen, sizeof kRgen},
                          {VK_SHADER_STAGE_MISS_BIT_KHR, kMiss, sizeof kMiss},
-                         {VK_SHADER_STAGE_INTERSECTION_BIT_KHR, kRint, sizeof kRint},
+                         tfdm ? Stage{VK_SHADER_STAGE_INTERSECTION_BIT_KHR, kTfdmRint, sizeof kTfdmRint}
+                              : Stage{VK_SHADER_STAGE_INTERSECTION_BIT_KHR, kRint, sizeof kRint},
                          {VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, kPrismHit, sizeof kPrismHit},
                          {VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, kTriangleHit, sizeof kTriangleHit}};
     VkPipelineShaderStageCreateInfo stages[5];
@@ -644,9 +649,11 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
   size_t tlasBytes = 0;
   D.tlas = D.buildAS(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, tg, uint32_t(instances.size()), tlasBytes);
 
-  D.createPipeline();
+  bool tfdm = false;
+  for (const MeshGpu& m : R.meshes) tfdm = tfdm || m.method == OBLONG_METHOD_TFDM;
+  D.createPipeline(tfdm);
   memory_ = {{"vulkan/triangles", R.triBytes},
-             {"vulkan/rmip_layers", R.rmipBytes},
+             {tfdm ? "vulkan/tfdm_mipmap" : "vulkan/rmip_layers", R.rmipBytes},
              {"vulkan/height_maps", R.texelBytes},
              {"vulkan/aabbs", R.aabbs.size() * sizeof(VkAabbPositionsKHR)},
              {"vulkan/plain_meshes", R.plainIndex.size() * 4 + R.plainUV.size() * 8 + R.plainPos.size() * 4},

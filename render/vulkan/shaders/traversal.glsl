@@ -233,7 +233,7 @@ struct Entry {
   double ta, tb;    // box mode: ray interval
   bool box;
 };
-Entry g_st[OBLONG_TRAV_STACK];
+Entry g_st[OBLONG_TRAV_STACK_GPU];
 int g_sp;
 
 void pushPiece(CurvePoint a, CurvePoint b) {
