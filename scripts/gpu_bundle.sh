@@ -10,7 +10,12 @@
 #   BUNDLE_DIR/run.sh RESULTS_DIR                                     (on the GPU machine)
 #
 # Environment: OBLONG_BUNDLE_MIB (size budget, default 60), OBLONG_PARITY_SIZE (the
-# camera rays whose hits the GPU must reproduce, default 320x240).
+# camera rays whose hits the GPU must reproduce, default 320x240), OBLONG_BUNDLE_SCENES
+# (scene files under scenes/ without .json, in order of priority; NAME@L bakes and
+# traces it at the fixed level of detail L, a map 2^L times smaller per side, for a
+# machine whose transfer limit the full map exceeds), OBLONG_BUNDLE_XZ (1: the baked
+# scenes xz-compressed, about a third smaller; run.sh unpacks them with xz or python3;
+# the default; 0: uncompressed).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -39,58 +44,86 @@ done
 budget=$(( BUDGET_MIB * 1024 * 1024 ))
 used() { du -sb "$BUNDLE" | cut -f1; }
 
-# In order of priority; a scene that would exceed the budget (or whose data is not set
-# up) is left out with a line saying so.
+# In order of priority, each scene with both methods (the canonical traversal and the
+# tfdm baseline, which the GPU table compares); a scene whose pair would exceed the budget
+# (or whose data is not set up) is left out with a line saying so.
 ref="$BUNDLE/cpu_reference.tsv"
-printf 'scene\trays\thits\tchecksum\tcpu_mrays_per_second\tcpu_threads\n' >"$ref"
+printf 'file\tscene\tmethod\trays\thits\tchecksum\tcpu_mrays_per_second\tcpu_threads\n' >"$ref"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-for s in asteroid terrain quad_tiled paper/alien_sphere paper/terracotta_roof paper/desert_tire paper/diving_helmet \
-         paper/creature; do
-  name="$(basename "$s")"
-  out="$BUNDLE/scenes/$name.oblg"
-  if ! "$OBLONG" bake "$ROOT/scenes/$s.json" -o "$out" >"$tmp/bake.txt" 2>&1; then
-    say "$name: left out: $(tail -1 "$tmp/bake.txt")"
-    rm -f "$out"
-    continue
-  fi
-  if [ "$(used)" -gt "$budget" ]; then
-    say "$name: left out: $(( $(stat -c %s "$out") >> 20 )) MiB would take the bundle past $BUDGET_MIB MiB"
-    rm -f "$out"
-    continue
-  fi
+SCENES="${OBLONG_BUNDLE_SCENES:-asteroid quad_tiled paper/terracotta_roof@1 paper/alien_sphere@1 paper/desert_tire@2 paper/diving_helmet@2 paper/creature@2}"
+for entry in $SCENES; do
+  s="${entry%@*}"
+  lod=(); name="$(basename "$s")"
+  if [ "$entry" != "$s" ]; then lod=(--lod "${entry#*@}"); name="$name-lod${entry#*@}"; fi
+  ok=1
+  for method in canonical tfdm; do
+    flags=("${lod[@]}"); file="$name"
+    [ "$method" = tfdm ] && flags+=(--baseline tfdm) && file="$name-tfdm"
+    if ! "$OBLONG" bake "$ROOT/scenes/$s.json" "${flags[@]}" -o "$BUNDLE/scenes/$file.oblg" >"$tmp/bake.txt" 2>&1; then
+      say "$name: left out: $method: $(tail -1 "$tmp/bake.txt")"
+      ok=0
+      break
+    fi
+  done
   # The CPU's answer for the parity rays (the camera's at $PARITY), and its speed here.
-  "$VK" "$out" --size "$PARITY" --rays-out "$tmp/rays.bin" --no-trace
-  "$OBLONG" trace "$ROOT/scenes/$s.json" --rays "$tmp/rays.bin" -o "$tmp/hits.csv" --stats "$tmp/stats.json" >/dev/null
-  sum="$("$VK" --checksum "$tmp/hits.csv")"
-  read -r rays hits mrays threads < <(python3 -c 'import json,sys; j=json.load(open(sys.argv[1]))
+  for method in canonical tfdm; do
+    [ "$ok" = 1 ] || break
+    flags=("${lod[@]}"); file="$name"
+    [ "$method" = tfdm ] && flags+=(--baseline tfdm) && file="$name-tfdm"
+    "$VK" "$BUNDLE/scenes/$file.oblg" --size "$PARITY" --rays-out "$tmp/rays.bin" --no-trace
+    "$OBLONG" trace "$ROOT/scenes/$s.json" "${flags[@]}" --rays "$tmp/rays.bin" -o "$tmp/hits.csv" --stats "$tmp/stats.json" >/dev/null
+    sum="$("$VK" --checksum "$tmp/hits.csv")"
+    read -r rays hits mrays threads < <(python3 -c 'import json,sys; j=json.load(open(sys.argv[1]))
 print(j["rays"]["count"], j["rays"]["hits"], j["mrays_per_second"], j.get("run", {}).get("threads", ""))' "$tmp/stats.json")
-  printf '%s\t%s\t%s\t%s\t%.3f\t%s\n' "$name" "$rays" "$hits" "$sum" "$mrays" "$threads" >>"$ref"
-  say "$name: $(( $(stat -c %s "$out") >> 20 )) MiB, CPU: $rays rays, $hits hits, checksum $sum, $mrays Mrays/s"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%.3f\t%s\n' "$file" "$name" "$method" "$rays" "$hits" "$sum" "$mrays" "$threads" >>"$tmp/ref.tsv"
+    say "$file: $(( $(stat -c %s "$BUNDLE/scenes/$file.oblg") >> 20 )) MiB, CPU: $rays rays, $hits hits, checksum $sum, $mrays Mrays/s"
+    [ "${OBLONG_BUNDLE_XZ:-1}" = 1 ] && xz -T2 -3 -f "$BUNDLE/scenes/$file.oblg"
+  done
+  if [ "$ok" = 1 ] && [ "$(used)" -gt "$budget" ]; then
+    say "$name: left out: $(( $(du -cb "$BUNDLE/scenes/$name".oblg* "$BUNDLE/scenes/$name-tfdm".oblg* | tail -1 | cut -f1) >> 20 )) MiB (both methods) would take the bundle past $BUDGET_MIB MiB"
+    ok=0
+  fi
+  if [ "$ok" = 0 ]; then
+    rm -f "$BUNDLE/scenes/$name".oblg* "$BUNDLE/scenes/$name-tfdm".oblg*
+    : >"$tmp/ref.tsv"
+    continue
+  fi
+  cat "$tmp/ref.tsv" >>"$ref"
+  : >"$tmp/ref.tsv"
 done
 echo "$PARITY" >"$BUNDLE/parity_size.txt"
 git -C "$ROOT" describe --always --dirty >"$BUNDLE/version.txt" 2>/dev/null || true
 
 cat >"$BUNDLE/run.sh" <<'RUN'
 #!/usr/bin/env bash
-# The GPU measurement (written by scripts/gpu_bundle.sh; docs/vulkan.md "On a GPU"):
-# per baked scene, the parity rays (hit checksum against the CPU's, cpu_reference.tsv),
-# then primary rays (1024^2, then 2048^2 when time allows) and the path integrator,
-# each timed per pass by timestamp queries. Everything lands in RESULTS_DIR; the whole
-# run stays under OBLONG_RUN_SECONDS (default 450: 7.5 minutes).
-#   run.sh RESULTS_DIR
+# The GPU measurement (written by scripts/gpu_bundle.sh; docs/vulkan.md "On a GPU"): per
+# baked scene and method (NAME.oblg: the canonical traversal; NAME-tfdm.oblg: the tfdm
+# baseline), the parity rays (hit checksum against the CPU's, cpu_reference.tsv), then
+# primary rays (1024^2, and 2048^2 when time allows) and the path integrator, each timed
+# per pass by timestamp queries, repeated (the median is reported). Writes RESULTS_DIR:
+# one JSON per run, run.log, summary.txt and table.md (the paper's Table 1 layout: ms per
+# frame, Mrays/s, bytes, speed-up over tfdm). The whole run stays under
+# OBLONG_RUN_SECONDS (default 450: 7.5 minutes); --quick: parity and primary rays only
+# (3 repeats), under 120 s. Exit status 1 when a parity checksum differs or was not
+# measured.
+#   run.sh [--quick] RESULTS_DIR
 set -u
+QUICK=0
+if [ "${1:-}" = "--quick" ]; then QUICK=1; shift; fi
 HERE="$(cd "$(dirname "$0")" && pwd)"
-OUT="${1:?usage: run.sh RESULTS_DIR}"
+OUT="${1:?usage: run.sh [--quick] RESULTS_DIR}"
 mkdir -p "$OUT"
 OUT="$(cd "$OUT" && pwd)"
 exec > >(tee "$OUT/run.log") 2>&1
 T0=$(date +%s)
-END=$(( T0 + ${OBLONG_RUN_SECONDS:-450} ))
+if [ "$QUICK" = 1 ]; then LIMIT=${OBLONG_RUN_SECONDS:-120}; else LIMIT=${OBLONG_RUN_SECONDS:-450}; fi
+END=$(( T0 + LIMIT ))
 left() { echo $(( END - $(date +%s) )); }
 VK=("$HERE/bin/oblong_vkbench")
 CAP="${OBLONG_RUN_CAP:-120}"  # seconds for one oblong_vkbench run at most
 PARITY="$(cat "$HERE/parity_size.txt")"
+SIZE="${OBLONG_RUN_SIZE:-1024}"  # primary and path images: SIZE x SIZE
 
 # The Vulkan loader: the system's, else the bundled one.
 if ldd "${VK[0]}" | grep -q "libvulkan.so.1 => not found"; then export LD_LIBRARY_PATH="$HERE/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"; fi
@@ -123,6 +156,18 @@ fi
   echo "started as: ${VK[*]}"
 } >"$OUT/environment.txt" 2>&1
 cp "$HERE/cpu_reference.tsv" "$OUT/"
+# xz-compressed scenes (OBLONG_BUNDLE_XZ) are unpacked into a folder beside the results.
+SCENES_DIR="$HERE/scenes"
+if ls "$HERE"/scenes/*.oblg.xz >/dev/null 2>&1; then
+  SCENES_DIR="$OUT/.scenes"
+  mkdir -p "$SCENES_DIR"
+  for z in "$HERE"/scenes/*.oblg.xz; do
+    f="$SCENES_DIR/$(basename "$z" .xz)"
+    if command -v xz >/dev/null; then xz -dc "$z" >"$f"
+    else python3 -c 'import lzma, shutil, sys; shutil.copyfileobj(lzma.open(sys.argv[1]), open(sys.argv[2], "wb"))' "$z" "$f"; fi
+  done
+  echo "run.sh: unpacked $(ls "$SCENES_DIR" | wc -l) scenes in $(( $(date +%s) - T0 )) s"
+fi
 
 # run NAME ARGS...: one oblong_vkbench run, limited to the time left.
 run() {
@@ -136,40 +181,82 @@ run() {
   echo "run.sh: $name: exit $rc, $(( $(date +%s) - t )) s"
   return $rc
 }
-field() { sed -n "s/.*\"$2\": \"\{0,1\}\([^\",]*\)\"\{0,1\},\{0,1\}$/\1/p" "$1" | head -1; }
+# field FILE KEY: the first value of "KEY" in a JSON written by oblong_vkbench (one key a line).
+field() { sed -n "s|.*\"$2\": \"\{0,1\}\([^\",]*\)\"\{0,1\},\{0,1\}$|\1|p" "$1" 2>/dev/null | head -1; }
 
 summary="$OUT/summary.txt"
 : >"$summary"
-scenes=$(ls "$HERE"/scenes/*.oblg)
-for f in $scenes; do  # parity first: the checksums are the point
+files=$(ls "$SCENES_DIR"/*.oblg)
+status=0
+for f in $files; do  # parity first: the checksums are the point
   s="$(basename "$f" .oblg)"
   if ! run "${s}_parity" "$f" --size "$PARITY" --repeat 1; then
     echo "$s parity $PARITY: not measured (see run.log)" | tee -a "$summary"
+    status=1
     continue
   fi
   got="$(field "$OUT/${s}_parity.json" hit_checksum)"
-  want="$(awk -v s="$s" '$1 == s {print $4}' "$HERE/cpu_reference.tsv")"
-  [ "$got" = "$want" ] && verdict=SAME || verdict=DIFFERENT
+  want="$(awk -v s="$s" '$1 == s {print $6}' "$HERE/cpu_reference.tsv")"
+  [ "$got" = "$want" ] && verdict=SAME || { verdict=DIFFERENT; status=1; }
   echo "$s parity $PARITY: GPU checksum $got, CPU $want: $verdict" | tee -a "$summary"
 done
-for f in $scenes; do
+reps=5; [ "$QUICK" = 1 ] && reps=3
+for f in $files; do
   s="$(basename "$f" .oblg)"
   t=$(date +%s)
-  run "${s}_primary_1024" "$f" --size 1024x1024 --repeat 5 || continue
+  run "${s}_primary_$SIZE" "$f" --size "${SIZE}x$SIZE" --repeat $reps || continue
   # 2048^2 (the papers' primary-ray setting) when 1024^2 was quick enough.
-  if [ $(( $(date +%s) - t )) -lt 20 ]; then run "${s}_primary_2048" "$f" --size 2048x2048 --repeat 5; fi
+  if [ "$QUICK" = 0 ] && [ "$SIZE" = 1024 ] && [ $(( $(date +%s) - t )) -lt 20 ]; then
+    run "${s}_primary_2048" "$f" --size 2048x2048 --repeat 5
+  fi
 done
-for f in $scenes; do
-  s="$(basename "$f" .oblg)"
-  run "${s}_path_1024" "$f" --size 1024x1024 --integrator path --repeat 3
-done
+if [ "$QUICK" = 0 ]; then
+  for f in $files; do
+    s="$(basename "$f" .oblg)"
+    run "${s}_path_$SIZE" "$f" --size "${SIZE}x$SIZE" --integrator path --repeat 3
+  done
+fi
 for j in "$OUT"/*_primary_*.json "$OUT"/*_path_*.json; do
   [ -f "$j" ] || continue
   echo "$(basename "$j" .json): $(field "$j" rays_per_repeat) rays, GPU $(field "$j" gpu_seconds_median) s," \
        "$(field "$j" gpu_median) Mrays/s (GPU), $(field "$j" wall_median) Mrays/s (wall), checksum $(field "$j" hit_checksum)" |
     tee -a "$summary"
 done
+
+# table.md: per scene, the canonical traversal and tfdm side by side.
+ms() { local v; v="$(field "$1" gpu_seconds_median)"; [ -n "$v" ] && awk -v v="$v" 'BEGIN {printf "%.2f", v * 1000}' || echo "–"; }
+mr() { local v; v="$(field "$1" gpu_median)"; [ -n "$v" ] && awk -v v="$v" 'BEGIN {printf "%.3g", v}' || echo "–"; }
+mib() { [ -n "$1" ] && awk -v v="$1" 'BEGIN {printf "%.1f", v / 1048576}' || echo "–"; }
+ratio() { [ -n "$1" ] && [ -n "$2" ] && [ "$1" != "–" ] && [ "$2" != "–" ] && awk -v a="$1" -v b="$2" 'BEGIN {printf "%.2f", b / a}' || echo "–"; }
+{
+  any="$(ls "$OUT"/*_parity.json 2>/dev/null | head -1)"
+  echo "GPU: $(field "$any" name), driver $(field "$any" driver)"
+  echo "Times: GPU timestamps, median of the repeats; ${SIZE}x${SIZE} camera rays (primary) or paths (path, up to 5 vertices)."
+  echo
+  echo "| scene | method | primary ms | primary Mrays/s | path ms | path Mrays/s | structure MiB | total MiB | speed-up over tfdm (primary / path) | parity |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
+  for f in $files; do
+    s="$(basename "$f" .oblg)"
+    case "$s" in *-tfdm) continue ;; esac
+    for m in "$s" "$s-tfdm"; do
+      p="$OUT/${m}_primary_$SIZE.json"; q="$OUT/${m}_path_$SIZE.json"; par="$OUT/${m}_parity.json"
+      [ -f "$par" ] || [ -f "$p" ] || continue
+      src="$p"; [ -f "$src" ] || src="$par"
+      struct="$(field "$src" vulkan/rmip_layers)"; [ -n "$struct" ] || struct="$(field "$src" vulkan/tfdm_mipmap)"
+      v=$(grep -m1 -F "$m parity" "$summary" | awk '{print $NF}')
+      if [ "$m" = "$s" ]; then
+        rp="$(ratio "$(ms "$p")" "$(ms "$OUT/${s}-tfdm_primary_$SIZE.json")") / $(ratio "$(ms "$q")" "$(ms "$OUT/${s}-tfdm_path_$SIZE.json")")"
+        echo "| $s | canonical | $(ms "$p") | $(mr "$p") | $(ms "$q") | $(mr "$q") | $(mib "$struct") | $(mib "$(field "$src" memory_total)") | $rp | $v |"
+      else
+        echo "| $s | tfdm | $(ms "$p") | $(mr "$p") | $(ms "$q") | $(mr "$q") | $(mib "$struct") | $(mib "$(field "$src" memory_total)") | 1 | $v |"
+      fi
+    done
+  done
+} >"$OUT/table.md"
+cat "$OUT/table.md"
+rm -rf "$OUT/.scenes"
 echo "run.sh: done in $(( $(date +%s) - T0 )) s; results in $OUT"
+exit $status
 RUN
 chmod +x "$BUNDLE/run.sh"
 size=$(used)

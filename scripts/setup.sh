@@ -49,7 +49,8 @@ if [ "$minimal" = 0 ]; then
   # spirv-val from bookworm; Mesa's lavapipe (CPU Vulkan with VK_KHR_ray_tracing_pipeline,
   # Mesa >= 24.1) only from bookworm-backports, so the suite is added and the driver is
   # pinned to it below.
-  PKGS+=(libvulkan-dev glslc spirv-tools vulkan-tools)
+  # xz-utils: scripts/gpu_bundle.sh compresses the baked scenes.
+  PKGS+=(libvulkan-dev glslc spirv-tools vulkan-tools xz-utils)
 
   # experiments/run_all --backend slurm and its test (tests/slurm_test.sh), which starts a
   # single-node Slurm of its own: the controller, the node daemon, the client commands
