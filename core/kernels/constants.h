@@ -34,7 +34,9 @@
 // deeper stack_depth instead of running a different traversal.
 #define OBLONG_TRAV_STACK 128
 #define OBLONG_TRAV_STACK_DEFAULT 32
+#ifndef OBLONG_TRAV_STACK_GPU  // CMake: OBLONG_GPU_STACK
 #define OBLONG_TRAV_STACK_GPU 32
+#endif
 
 // Entries of the tfdm baseline's node stack (traversal/tfdm.cpp, shaders/tfdm.glsl): at
 // most 4 roots plus 3 per level descended, and a root level is at most 30 (cell indices
