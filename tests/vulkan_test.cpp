@@ -408,6 +408,31 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
   CHECK(total.hits > total.rays / 10);
 }
 
+namespace {
+// A 64² uniform-noise map (seeded) on a plane of size 2 and `n` rays from above at 5 to 85
+// degrees off the plane: tiled 1e3 and 1e4 times, the cases of the wide-ε leaves and of
+// tfdm's folded upper levels.
+struct TiledPlane {
+  std::shared_ptr<const HeightMap> map;
+  Mesh plane;
+  std::vector<Ray> rays;
+};
+TiledPlane tiledPlane(uint32_t seed, int n) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> U(0.0f, 1.0f);
+  std::vector<float> texels(64 * 64);
+  for (float& v : texels) v = U(rng);
+  TiledPlane tp{std::make_shared<const HeightMap>(64, 64, std::move(texels)), planeMesh(vec2(2.0f), ivec2(1)), {}};
+  for (int i = 0; i < n; ++i) {
+    const float a = (5.0f + 80.0f * U(rng)) * 3.14159265f / 180.0f, phi = 6.2831853f * U(rng);
+    const vec3 target(1.8f * U(rng) - 0.9f, 0.0f, 1.8f * U(rng) - 0.9f);
+    const vec3 d(std::cos(a) * std::cos(phi), -std::sin(a), std::cos(a) * std::sin(phi));
+    tp.rays.push_back({target - 0.5f * d, d, 0.0f, 100.0f});
+  }
+  return tp;
+}
+}  // namespace
+
 // Where ε spans texels (float rounding at a fine texel), leaves are boxes (RayPatch::leaf):
 // a branch the conformance scenarios never take, since their brute-force oracle cannot
 // afford the tiling that reaches it. The plane of tests/orientation_test.cpp's tiling
@@ -415,20 +440,12 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
 TEST_CASE("vulkan: wide eps (a plane tiled 1e3 and 1e4 times), the GPU runs the CPU's traversal step for step", "[vulkan]") {
   vulkanTestEnv();
   const std::map<std::string, int64_t> stats0 = Stats::snapshot();
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> U(0.0f, 1.0f);
-  std::vector<float> texels(64 * 64);
-  for (float& v : texels) v = U(rng);
-  const auto map = std::make_shared<const HeightMap>(64, 64, std::move(texels));
-  const Mesh plane = planeMesh(vec2(2.0f), ivec2(1));
+  const TiledPlane tp = tiledPlane(5, 30);
+  const auto& map = tp.map;
+  const Mesh& plane = tp.plane;
   std::vector<Ray> rays = {{vec3(-1.5f, 0.005f, 0.1f), vec3(1, 0, 0), 0.0f, 100.0f},
                            {vec3(0.1f, 1.0f, 0.2f), vec3(0, -1, 0), 0.0f, 100.0f}};
-  for (int i = 0; i < 30; ++i) {  // from above, 5 to 85 degrees off the plane
-    const float a = (5.0f + 80.0f * U(rng)) * 3.14159265f / 180.0f, phi = 6.2831853f * U(rng);
-    const vec3 target(1.8f * U(rng) - 0.9f, 0.0f, 1.8f * U(rng) - 0.9f);
-    const vec3 d(std::cos(a) * std::cos(phi), -std::sin(a), std::cos(a) * std::sin(phi));
-    rays.push_back({target - 0.5f * d, d, 0.0f, 100.0f});
-  }
+  rays.insert(rays.end(), tp.rays.begin(), tp.rays.end());
   StepParity total;
   int printed = 0;
   for (float tiling : {1e3f, 1e4f})
@@ -1010,19 +1027,10 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's tfdm step for step", "[v
 // level 6) tfdm's nodes are folds of the stored ones, on the GPU as on the CPU.
 TEST_CASE("vulkan: tfdm on a plane tiled 1e3 and 1e4 times, step for step", "[vulkan][tfdm]") {
   vulkanTestEnv();
-  std::mt19937 rng(6);
-  std::uniform_real_distribution<float> U(0.0f, 1.0f);
-  std::vector<float> texels(64 * 64);
-  for (float& v : texels) v = U(rng);
-  const auto map = std::make_shared<const HeightMap>(64, 64, std::move(texels));
-  const Mesh plane = planeMesh(vec2(2.0f), ivec2(1));
-  std::vector<Ray> rays;
-  for (int i = 0; i < 24; ++i) {  // from above, 5 to 85 degrees off the plane
-    const float a = (5.0f + 80.0f * U(rng)) * 3.14159265f / 180.0f, phi = 6.2831853f * U(rng);
-    const vec3 target(1.8f * U(rng) - 0.9f, 0.0f, 1.8f * U(rng) - 0.9f);
-    const vec3 d(std::cos(a) * std::cos(phi), -std::sin(a), std::cos(a) * std::sin(phi));
-    rays.push_back({target - 0.5f * d, d, 0.0f, 100.0f});
-  }
+  const TiledPlane tp = tiledPlane(6, 24);
+  const auto& map = tp.map;
+  const Mesh& plane = tp.plane;
+  const std::vector<Ray>& rays = tp.rays;
   TraversalConfig tf;
   tf.baseline = "tfdm";
   AccelOptions ao;

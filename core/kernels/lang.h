@@ -156,15 +156,15 @@ vec3 crossF(vec3 x, vec3 y) {
 // (25 + 24 and 25 + 25 bits), so each comparison is exact; ties go to the even neighbour.
 float nextUpF(float x) { return uintBitsToFloat(floatBitsToUint(x) + 1u); }    // x > 0, finite
 float nextDownF(float x) { return uintBitsToFloat(floatBitsToUint(x) - 1u); }  // x > 0
-float divF(float a, float b) {
-  precise float q = a / b;
-  if (a == 0.0f || isinf(a) || isnan(a) || b == 0.0f || isinf(b) || isnan(b) || q == 0.0f || isinf(q)) return q;
-  precise double A = abs(double(a)), B = abs(double(b));
-  float r = abs(q);
+// The float nearest to A / B (root false) or to √A (root true), A, B > 0, from an estimate
+// r > 0 within 4 ulp of it: r steps to a neighbour while A lies beyond the midpoint m
+// between them, A against m·B (or m·m); an exact midpoint goes to the even one (a
+// quotient's; a root is never one).
+float nearestF(float r, double A, double B, bool root) {
   for (int it = 0; it < 4; ++it) {
     float dn = nextDownF(r), up = nextUpF(r);
     precise double lo = (double(r) + double(dn)) * 0.5, hi = (double(r) + double(up)) * 0.5;
-    precise double loB = lo * B, hiB = hi * B;
+    precise double loB = lo * (root ? lo : B), hiB = hi * (root ? hi : B);
     if (A < loB) r = dn;
     else if (A > hiB) r = up;
     else {
@@ -173,22 +173,18 @@ float divF(float a, float b) {
       break;
     }
   }
+  return r;
+}
+float divF(float a, float b) {
+  precise float q = a / b;
+  if (a == 0.0f || isinf(a) || isnan(a) || b == 0.0f || isinf(b) || isnan(b) || q == 0.0f || isinf(q)) return q;
+  float r = nearestF(abs(q), abs(double(a)), abs(double(b)), false);
   return (a < 0.0f) != (b < 0.0f) ? -r : r;
 }
 float sqrtF(float x) {
   precise float q = sqrt(x);
   if (!(x > 0.0f) || isinf(x) || q == 0.0f) return q;
-  precise double X = double(x);
-  float r = q;
-  for (int it = 0; it < 4; ++it) {
-    float dn = nextDownF(r), up = nextUpF(r);
-    precise double lo = (double(r) + double(dn)) * 0.5, hi = (double(r) + double(up)) * 0.5;
-    precise double lo2 = lo * lo, hi2 = hi * hi;
-    if (X < lo2) r = dn;
-    else if (X > hi2) r = up;
-    else break;  // no float lies on a midpoint's square: no ties
-  }
-  return r;
+  return nearestF(q, double(x), 1.0, true);
 }
 float lengthF(vec3 v) { return sqrtF(dotF(v, v)); }
 
