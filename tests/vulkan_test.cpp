@@ -720,6 +720,12 @@ TEST_CASE("vulkan: bad input gets one clear error", "[vulkan]") {
   AccelOptions other;
   other.traversal.range = "minmax_mipmap";
   CHECK_THROWS_WITH(vk::VulkanScene(s, other), Catch::Contains("rmip+newton+midpoint2d only"));
+  AccelOptions deep;
+  deep.traversal.stackDepth = OBLONG_TRAV_STACK_GPU + 1;  // the CPU takes it, the shaders' array does not
+  CHECK_THROWS_WITH(vk::VulkanScene(s, deep), Catch::Contains("strategies.stack_depth"));
+  AccelOptions oracle;
+  oracle.traversal.baseline = "bruteforce";
+  CHECK_THROWS_WITH(vk::VulkanScene(s, oracle), Catch::Contains("--baseline tfdm only"));
   vulkanTestEnv();
   vk::VulkanScene gpu(s, AccelOptions{});
   Ray r;
