@@ -431,6 +431,34 @@ TiledPlane tiledPlane(uint32_t seed, int n) {
   }
   return tp;
 }
+// The plane tiled 1e3 and 1e4 times, each of its triangles a scene of its own, traced with
+// `cfg` on the CPU and the GPU; the first 8 disagreements are printed.
+StepParity tiledPlaneParity(const TiledPlane& tp, const TraversalConfig& cfg, const char* what) {
+  AccelOptions ao;
+  ao.traversal = cfg;
+  StepParity total;
+  int printed = 0;
+  for (float tiling : {1e3f, 1e4f})
+    for (size_t ti = 0; ti < tp.plane.triangles.size(); ++ti) {
+      const DisplacedTriangle T = tp.plane.triangle(ti);
+      const Displacement d{tp.map, 0.01f, 0.0f, vec2(tiling)};
+      const auto cpu = createIntersector(cfg, {T}, d);
+      const Scene scene = oneTriangleScene(T, d);
+      vk::VulkanScene gpu(scene, ao);
+      const SceneReach reach = sceneReach(scene);
+      std::vector<RayCounters> gw;
+      const std::vector<Hit> g = gpu.trace(tp.rays, &gw, nullptr);
+      for (size_t i = 0; i < tp.rays.size(); ++i) {
+        const RayParity rp = compareRay(*cpu, cpu->bounds(0), nearScene(tp.rays[i], reach), g[i], gw[i]);
+        total.add(rp.p);
+        if ((!rp.p.bitAll || !rp.p.sameWork) && printed++ < 8)
+          fmt::print("vulkan {}, tiling {}, triangle {}, ray {}:\n  cpu:    {} t={} | {}\n  vulkan: {} t={} | {}\n", what,
+                     tiling, ti, i, rp.hit ? "hit " : "miss", rp.hit ? rp.h.t : 0.0f, workText(rp.cw),
+                     g[i].valid() ? "hit " : "miss", g[i].valid() ? g[i].t : 0.0f, workText(gw[i]));
+      }
+    }
+  return total;
+}
 }  // namespace
 
 // Where ε spans texels (float rounding at a fine texel), leaves are boxes (RayPatch::leaf):
@@ -440,38 +468,10 @@ TiledPlane tiledPlane(uint32_t seed, int n) {
 TEST_CASE("vulkan: wide eps (a plane tiled 1e3 and 1e4 times), the GPU runs the CPU's traversal step for step", "[vulkan]") {
   vulkanTestEnv();
   const std::map<std::string, int64_t> stats0 = Stats::snapshot();
-  const TiledPlane tp = tiledPlane(5, 30);
-  const auto& map = tp.map;
-  const Mesh& plane = tp.plane;
-  std::vector<Ray> rays = {{vec3(-1.5f, 0.005f, 0.1f), vec3(1, 0, 0), 0.0f, 100.0f},
-                           {vec3(0.1f, 1.0f, 0.2f), vec3(0, -1, 0), 0.0f, 100.0f}};
-  rays.insert(rays.end(), tp.rays.begin(), tp.rays.end());
-  StepParity total;
-  int printed = 0;
-  for (float tiling : {1e3f, 1e4f})
-    for (size_t ti = 0; ti < plane.triangles.size(); ++ti) {
-      const DisplacedTriangle T = plane.triangle(ti);
-      const Displacement d{map, 0.01f, 0.0f, vec2(tiling)};
-      const auto cpu = createIntersector(TraversalConfig{}, {T}, d);
-      const AABB box = cpu->bounds(0);
-      const Scene scene = oneTriangleScene(T, d);
-      vk::VulkanScene gpu(scene, AccelOptions{});
-      const SceneReach reach = sceneReach(scene);
-      std::vector<RayCounters> gw;
-      const std::vector<Hit> g = gpu.trace(rays, &gw, nullptr);
-      for (size_t i = 0; i < rays.size(); ++i) {
-        const RayParity rp = compareRay(*cpu, box, nearScene(rays[i], reach), g[i], gw[i]);
-        const StepParity& one = rp.p;
-        const bool hit = rp.hit;
-        const TriangleHit& h = rp.h;
-        const RayCounters& cw = rp.cw;
-        total.add(one);
-        if ((!one.bitAll || !one.sameWork) && printed++ < 8)
-          fmt::print("vulkan wide eps, tiling {}, triangle {}, ray {}:\n  cpu:    {} t={} | {}\n  vulkan: {} t={} | {}\n",
-                     tiling, ti, i, hit ? "hit " : "miss", hit ? h.t : 0.0f, workText(cw),
-                     g[i].valid() ? "hit " : "miss", g[i].valid() ? g[i].t : 0.0f, workText(gw[i]));
-      }
-    }
+  TiledPlane tp = tiledPlane(5, 30);
+  tp.rays.insert(tp.rays.begin(), {{vec3(-1.5f, 0.005f, 0.1f), vec3(1, 0, 0), 0.0f, 100.0f},
+                                   {vec3(0.1f, 1.0f, 0.2f), vec3(0, -1, 0), 0.0f, 100.0f}});
+  const StepParity total = tiledPlaneParity(tp, TraversalConfig{}, "wide eps");
   const std::map<std::string, int64_t> stats1 = Stats::snapshot();
   const auto wide = [&] {
     const auto a = stats0.find("traversal/WideLeaves"), b = stats1.find("traversal/WideLeaves");
@@ -1033,35 +1033,9 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's tfdm step for step", "[v
 // level 6) tfdm's nodes are folds of the stored ones, on the GPU as on the CPU.
 TEST_CASE("vulkan: tfdm on a plane tiled 1e3 and 1e4 times, step for step", "[vulkan][tfdm]") {
   vulkanTestEnv();
-  const TiledPlane tp = tiledPlane(6, 24);
-  const auto& map = tp.map;
-  const Mesh& plane = tp.plane;
-  const std::vector<Ray>& rays = tp.rays;
   TraversalConfig tf;
   tf.baseline = "tfdm";
-  AccelOptions ao;
-  ao.traversal = tf;
-  StepParity total;
-  int printed = 0;
-  for (float tiling : {1e3f, 1e4f})
-    for (size_t ti = 0; ti < plane.triangles.size(); ++ti) {
-      const DisplacedTriangle T = plane.triangle(ti);
-      const Displacement d{map, 0.01f, 0.0f, vec2(tiling)};
-      const auto cpu = createIntersector(tf, {T}, d);
-      const Scene scene = oneTriangleScene(T, d);
-      vk::VulkanScene gpu(scene, ao);
-      const SceneReach reach = sceneReach(scene);
-      std::vector<RayCounters> gw;
-      const std::vector<Hit> g = gpu.trace(rays, &gw, nullptr);
-      for (size_t i = 0; i < rays.size(); ++i) {
-        const RayParity rp = compareRay(*cpu, cpu->bounds(0), nearScene(rays[i], reach), g[i], gw[i]);
-        total.add(rp.p);
-        if ((!rp.p.bitAll || !rp.p.sameWork) && printed++ < 8)
-          fmt::print("vulkan tfdm tiled plane, tiling {}, triangle {}, ray {}:\n  cpu:    {} t={} | {}\n  vulkan: {} t={} | {}\n",
-                     tiling, ti, i, rp.hit ? "hit " : "miss", rp.hit ? rp.h.t : 0.0f, workText(rp.cw),
-                     g[i].valid() ? "hit " : "miss", g[i].valid() ? g[i].t : 0.0f, workText(gw[i]));
-      }
-    }
+  const StepParity total = tiledPlaneParity(tiledPlane(6, 24), tf, "tfdm tiled plane");
   fmt::print("vulkan tfdm tiled plane: {}\n", total.text());
   CHECK(total.bitAll == total.rays);
   CHECK(total.sameWork == total.rays);
