@@ -7,7 +7,7 @@
 # argument. docs/vulkan.md ("On a GPU") says how to use it.
 #
 #   scripts/gpu_bundle.sh [BUNDLE_DIR (default build/gpu_bundle)] [BUILD_DIR (default build)]
-#   BUNDLE_DIR/run.sh RESULTS_DIR                                     (on the GPU machine)
+#   BUNDLE_DIR/run.sh [--quick] RESULTS_DIR                           (on the GPU machine)
 #
 # Environment: OBLONG_BUNDLE_MIB (size budget, default 60), OBLONG_PARITY_SIZE (the
 # camera rays whose hits the GPU must reproduce, default 320x240), OBLONG_BUNDLE_SCENES
@@ -52,31 +52,34 @@ printf 'file\tscene\tmethod\trays\thits\tchecksum\tcpu_mrays_per_second\tcpu_thr
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 SCENES="${OBLONG_BUNDLE_SCENES:-asteroid quad_tiled paper/terracotta_roof@1 paper/alien_sphere@1 paper/desert_tire@2 paper/diving_helmet@2 paper/creature@2}"
+# method M: the flags and the baked file's name of method M for the current scene.
+method() {
+  flags=("${lod[@]}"); file="$name"
+  if [ "$1" = tfdm ]; then flags+=(--baseline tfdm); file="$name-tfdm"; fi
+}
 for entry in $SCENES; do
   s="${entry%@*}"
   lod=(); name="$(basename "$s")"
   if [ "$entry" != "$s" ]; then lod=(--lod "${entry#*@}"); name="$name-lod${entry#*@}"; fi
   ok=1
-  for method in canonical tfdm; do
-    flags=("${lod[@]}"); file="$name"
-    [ "$method" = tfdm ] && flags+=(--baseline tfdm) && file="$name-tfdm"
+  for m in canonical tfdm; do
+    method "$m"
     if ! "$OBLONG" bake "$ROOT/scenes/$s.json" "${flags[@]}" -o "$BUNDLE/scenes/$file.oblg" >"$tmp/bake.txt" 2>&1; then
-      say "$name: left out: $method: $(tail -1 "$tmp/bake.txt")"
+      say "$name: left out: $m: $(tail -1 "$tmp/bake.txt")"
       ok=0
       break
     fi
   done
   # The CPU's answer for the parity rays (the camera's at $PARITY), and its speed here.
-  for method in canonical tfdm; do
+  for m in canonical tfdm; do
     [ "$ok" = 1 ] || break
-    flags=("${lod[@]}"); file="$name"
-    [ "$method" = tfdm ] && flags+=(--baseline tfdm) && file="$name-tfdm"
+    method "$m"
     "$VK" "$BUNDLE/scenes/$file.oblg" --size "$PARITY" --rays-out "$tmp/rays.bin" --no-trace
     "$OBLONG" trace "$ROOT/scenes/$s.json" "${flags[@]}" --rays "$tmp/rays.bin" -o "$tmp/hits.csv" --stats "$tmp/stats.json" >/dev/null
     sum="$("$VK" --checksum "$tmp/hits.csv")"
     read -r rays hits mrays threads < <(python3 -c 'import json,sys; j=json.load(open(sys.argv[1]))
 print(j["rays"]["count"], j["rays"]["hits"], j["mrays_per_second"], j.get("run", {}).get("threads", ""))' "$tmp/stats.json")
-    printf '%s\t%s\t%s\t%s\t%s\t%s\t%.3f\t%s\n' "$file" "$name" "$method" "$rays" "$hits" "$sum" "$mrays" "$threads" >>"$tmp/ref.tsv"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%.3f\t%s\n' "$file" "$name" "$m" "$rays" "$hits" "$sum" "$mrays" "$threads" >>"$tmp/ref.tsv"
     say "$file: $(( $(stat -c %s "$BUNDLE/scenes/$file.oblg") >> 20 )) MiB, CPU: $rays rays, $hits hits, checksum $sum, $mrays Mrays/s"
     [ "${OBLONG_BUNDLE_XZ:-1}" = 1 ] && xz -T2 -3 -f "$BUNDLE/scenes/$file.oblg"
   done
