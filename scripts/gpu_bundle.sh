@@ -13,9 +13,11 @@
 # camera rays whose hits the GPU must reproduce, default 320x240), OBLONG_BUNDLE_SCENES
 # (scene files under scenes/ without .json, in order of priority; NAME@L bakes and
 # traces it at the fixed level of detail L, a map 2^L times smaller per side, for a
-# machine whose transfer limit the full map exceeds), OBLONG_BUNDLE_XZ (1: the baked
-# scenes xz-compressed, about a third smaller; run.sh unpacks them with xz or python3;
-# the default; 0: uncompressed).
+# machine whose transfer limit the full map exceeds), OBLONG_BUNDLE_XZ (1, the default:
+# each scene's two baked files in one NAME.tar.xz, one xz stream whose dictionary spans
+# both, since the two methods' prism records are mostly the same bytes; run.sh unpacks
+# them with xz and tar, else python3; 0: uncompressed), OBLONG_BUNDLE_GLIBC (1, the
+# default: this machine's glibc, ~3 MiB, for a GPU machine with an older one; 0: not).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -37,10 +39,12 @@ loader="$(ldd "$VK" | awk '/libvulkan.so.1/ {print $3}')"
 [ -n "$loader" ] && cp -L "$loader" "$BUNDLE/lib/libvulkan.so.1"
 # This machine's glibc (~3 MiB), for a GPU machine whose glibc is older than the one
 # oblong_vkbench was linked against (run.sh starts it through this ld.so only then).
-mkdir -p "$BUNDLE/lib/glibc"
-for l in ld-linux-x86-64.so.2 libc.so.6 libm.so.6 libpthread.so.0 libdl.so.2 librt.so.1; do
-  cp -L "/lib/x86_64-linux-gnu/$l" "$BUNDLE/lib/glibc/"
-done
+if [ "${OBLONG_BUNDLE_GLIBC:-1}" = 1 ]; then
+  mkdir -p "$BUNDLE/lib/glibc"
+  for l in ld-linux-x86-64.so.2 libc.so.6 libm.so.6 libpthread.so.0 libdl.so.2 librt.so.1; do
+    cp -L "/lib/x86_64-linux-gnu/$l" "$BUNDLE/lib/glibc/"
+  done
+fi
 budget=$(( BUDGET_MIB * 1024 * 1024 ))
 used() { du -sb "$BUNDLE" | cut -f1; }
 
@@ -81,14 +85,22 @@ for entry in $SCENES; do
 print(j["rays"]["count"], j["rays"]["hits"], j["mrays_per_second"], j.get("run", {}).get("threads", ""))' "$tmp/stats.json")
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%.3f\t%s\n' "$file" "$name" "$m" "$rays" "$hits" "$sum" "$mrays" "$threads" >>"$tmp/ref.tsv"
     say "$file: $(( $(stat -c %s "$BUNDLE/scenes/$file.oblg") >> 20 )) MiB, CPU: $rays rays, $hits hits, checksum $sum, $mrays Mrays/s"
-    [ "${OBLONG_BUNDLE_XZ:-1}" = 1 ] && xz -T2 -3 -f "$BUNDLE/scenes/$file.oblg"
   done
+  # One stream for both files, single-threaded (xz's threads would cut it into blocks)
+  # with a dictionary larger than the first file, so that the second's records are
+  # coded as matches into the first's.
+  if [ "$ok" = 1 ] && [ "${OBLONG_BUNDLE_XZ:-1}" = 1 ]; then
+    dict=$(( ($(stat -c %s "$BUNDLE/scenes/$name.oblg") >> 20) + 8 ))
+    tar -C "$BUNDLE/scenes" -cf - "$name.oblg" "$name-tfdm.oblg" |
+      xz -T1 --lzma2=preset=6,dict=${dict}MiB >"$BUNDLE/scenes/$name.tar.xz"
+    rm -f "$BUNDLE/scenes/$name.oblg" "$BUNDLE/scenes/$name-tfdm.oblg"
+  fi
   if [ "$ok" = 1 ] && [ "$(used)" -gt "$budget" ]; then
-    say "$name: left out: $(( $(du -cb "$BUNDLE/scenes/$name".oblg* "$BUNDLE/scenes/$name-tfdm".oblg* | tail -1 | cut -f1) >> 20 )) MiB (both methods) would take the bundle past $BUDGET_MIB MiB"
+    say "$name: left out: $(( $(du -cb "$BUNDLE/scenes/$name".oblg "$BUNDLE/scenes/$name-tfdm".oblg "$BUNDLE/scenes/$name".tar.xz 2>/dev/null | tail -1 | cut -f1) >> 20 )) MiB (both methods) would take the bundle past $BUDGET_MIB MiB"
     ok=0
   fi
   if [ "$ok" = 0 ]; then
-    rm -f "$BUNDLE/scenes/$name".oblg* "$BUNDLE/scenes/$name-tfdm".oblg*
+    rm -f "$BUNDLE/scenes/$name".oblg "$BUNDLE/scenes/$name-tfdm".oblg "$BUNDLE/scenes/$name".tar.xz
     : >"$tmp/ref.tsv"
     continue
   fi
@@ -159,15 +171,15 @@ fi
   echo "started as: ${VK[*]}"
 } >"$OUT/environment.txt" 2>&1
 cp "$HERE/cpu_reference.tsv" "$OUT/"
-# xz-compressed scenes (OBLONG_BUNDLE_XZ) are unpacked into a folder beside the results.
+# Compressed scenes (OBLONG_BUNDLE_XZ: NAME.tar.xz, both methods) are unpacked into a
+# folder beside the results.
 SCENES_DIR="$HERE/scenes"
-if ls "$HERE"/scenes/*.oblg.xz >/dev/null 2>&1; then
+if ls "$HERE"/scenes/*.tar.xz >/dev/null 2>&1; then
   SCENES_DIR="$OUT/.scenes"
   mkdir -p "$SCENES_DIR"
-  for z in "$HERE"/scenes/*.oblg.xz; do
-    f="$SCENES_DIR/$(basename "$z" .xz)"
-    if command -v xz >/dev/null; then xz -dc "$z" >"$f"
-    else python3 -c 'import lzma, shutil, sys; shutil.copyfileobj(lzma.open(sys.argv[1]), open(sys.argv[2], "wb"))' "$z" "$f"; fi
+  for z in "$HERE"/scenes/*.tar.xz; do
+    if command -v xz >/dev/null && command -v tar >/dev/null; then xz -dc "$z" | tar -x -C "$SCENES_DIR"
+    else python3 -c 'import sys, tarfile; tarfile.open(sys.argv[1], "r:xz").extractall(sys.argv[2])' "$z" "$SCENES_DIR"; fi
   done
   echo "run.sh: unpacked $(ls "$SCENES_DIR" | wc -l) scenes in $(( $(date +%s) - T0 )) s"
 fi
@@ -206,18 +218,21 @@ done
 reps=5; [ "$QUICK" = 1 ] && reps=3
 for f in $files; do
   s="$(basename "$f" .oblg)"
-  t=$(date +%s)
-  run "${s}_primary_$SIZE" "$f" --size "${SIZE}x$SIZE" --repeat $reps || continue
-  # 2048^2 (the papers' primary-ray setting) when 1024^2 was quick enough.
-  if [ "$QUICK" = 0 ] && [ "$SIZE" = 1024 ] && [ $(( $(date +%s) - t )) -lt 20 ]; then
-    run "${s}_primary_2048" "$f" --size 2048x2048 --repeat 5
-  fi
+  run "${s}_primary_$SIZE" "$f" --size "${SIZE}x$SIZE" --repeat $reps
 done
 if [ "$QUICK" = 0 ]; then
   for f in $files; do
     s="$(basename "$f" .oblg)"
     run "${s}_path_$SIZE" "$f" --size "${SIZE}x$SIZE" --integrator path --repeat 3
   done
+  # 2048^2 (the papers' primary-ray setting) with the time that is left, last: a table
+  # with every scene's primary and path rows comes first.
+  if [ "$SIZE" = 1024 ]; then
+    for f in $files; do
+      s="$(basename "$f" .oblg)"
+      run "${s}_primary_2048" "$f" --size 2048x2048 --repeat 3
+    done
+  fi
 fi
 for j in "$OUT"/*_primary_*.json "$OUT"/*_path_*.json; do
   [ -f "$j" ] || continue

