@@ -55,7 +55,7 @@ ref="$BUNDLE/cpu_reference.tsv"
 printf 'file\tscene\tmethod\trays\thits\tchecksum\tcpu_mrays_per_second\tcpu_threads\n' >"$ref"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-SCENES="${OBLONG_BUNDLE_SCENES:-asteroid quad_tiled paper/terracotta_roof@1 paper/alien_sphere@1 paper/desert_tire@2 paper/diving_helmet@2 paper/creature@2}"
+SCENES="${OBLONG_BUNDLE_SCENES:-asteroid quad_tiled paper/terracotta_roof@2 paper/alien_sphere@2 paper/diving_helmet@3 paper/desert_tire@3 paper/creature@3}"
 # method M: the flags and the baked file's name of method M for the current scene.
 method() {
   flags=("${lod[@]}"); file="$name"
@@ -115,8 +115,9 @@ cat >"$BUNDLE/run.sh" <<'RUN'
 # The GPU measurement (written by scripts/gpu_bundle.sh; docs/vulkan.md "On a GPU"): per
 # baked scene and method (NAME.oblg: the canonical traversal; NAME-tfdm.oblg: the tfdm
 # baseline), the parity rays (hit checksum against the CPU's, cpu_reference.tsv), then
-# primary rays (1024^2, and 2048^2 when time allows) and the path integrator, each timed
-# per pass by timestamp queries, repeated (the median is reported). Writes RESULTS_DIR:
+# primary rays at 1024^2, the path integrator at 1024^2, and primary rays at 2048^2 while
+# time is left, each timed per pass by timestamp queries, repeated (the median is
+# reported). Writes RESULTS_DIR:
 # one JSON per run, run.log, summary.txt and table.md (the paper's Table 1 layout: ms per
 # frame, Mrays/s, bytes, speed-up over tfdm). The whole run stays under
 # OBLONG_RUN_SECONDS (default 450: 7.5 minutes); --quick: parity and primary rays only
