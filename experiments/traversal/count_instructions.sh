@@ -12,12 +12,31 @@ cd "$(dirname "$0")/../.."
 build="${1:-build}"
 scene="${2:-scenes/asteroid.json}"
 command -v valgrind >/dev/null || { echo "count_instructions.sh: needs valgrind" >&2; exit 1; }
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+
+# Debian's OpenImageIO pulls in libhwy, whose load-time timer probe executes rdtscp,
+# which valgrind 3.19 does not decode: the process dies before main with an illegal
+# opcode. A stand-in for that one function (preloaded) lets it run; it only affects
+# libhwy's own timer.
+preload=""
+if ldd "$build/oblong" | grep libhwy >/dev/null; then
+  echo 'namespace hwy { namespace platform { double TimerResolution() { return 1e-9; } } }' >"$tmp/hwy_timer.cpp"
+  c++ -shared -fPIC -O2 "$tmp/hwy_timer.cpp" -o "$tmp/hwy_timer.so"
+  preload="$tmp/hwy_timer.so"
+fi
 
 irefs() {  # SIZE FLAGS...
   local size="$1"; shift
-  valgrind --tool=cachegrind --cache-sim=no --cachegrind-out-file=/dev/null \
-    "$build/oblong" render "$scene" --size "$size" --threads 1 -q -o /tmp/oblong_ir.png \
-    --integrator primary --spp 1 "$@" 2>&1 | grep "I *refs" | tr -d ',' | awk '{print $NF}'
+  local log="$tmp/valgrind.log"
+  if ! LD_PRELOAD="$preload" valgrind --tool=cachegrind --cache-sim=no --cachegrind-out-file=/dev/null \
+    "$build/oblong" render "$scene" --size "$size" --threads 1 -q -o "$tmp/ir.png" \
+    --integrator primary --spp 1 "$@" >"$log" 2>&1; then
+    echo "count_instructions.sh: oblong render under valgrind failed:" >&2
+    grep -v "^==" "$log" | tail -3 >&2; grep -m3 "Illegal\|unhandled" "$log" >&2
+    exit 1
+  fi
+  grep "I *refs" "$log" | tr -d ',' | awk '{print $NF}'
 }
 
 echo "| configuration | instructions per camera ray |"
