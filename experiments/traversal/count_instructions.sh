@@ -49,5 +49,5 @@ run() {  # NAME FLAGS...
   echo "| $name | $(( (c - a) / (256 * 192 - 64 * 48) )) |"
 }
 run canonical
-run tfdm --range minmax_mipmap --splitter quadtree --inversion-in-traversal false --marching-scale 1
+run driver_mipmap --range minmax_mipmap --splitter quadtree --inversion-in-traversal false --marching-scale 1
 run tessellated --baseline tessellated
