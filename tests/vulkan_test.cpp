@@ -16,9 +16,11 @@
 #include "render/rays_io.h"
 #include "render/renderer.h"
 #include "render/vulkan/rmip_layout.h"
+#include "render/vulkan/runner.h"
 #include "render/renderer.h"
 #include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"
+#include "traversal/traversal.h"
 #include "tests/test_util.h"
 #include "tests/fixtures/traversal_cases.h"
 
@@ -35,6 +37,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -53,11 +56,14 @@ std::string scenePath(const char* name) { return std::string(OBLONG_SOURCE_DIR) 
 // and the results do not depend on it (same bits with and without, docs/vulkan.md):
 // the tests compile it without LLVM's optimisation passes (GALLIVM_PERF=nopt, ~7 s)
 // into a shader cache of their own, shared by the test processes and kept apart from
-// the user's optimised one. Variables already set are left alone.
+// the user's optimised one. Variables already set are left alone. Then one device for
+// the rest of the process (vk::DeviceHold): the tests make dozens of small scenes, and
+// lavapipe compiles each pipeline in seconds, so they compile once.
 void vulkanTestEnv() {
   ::setenv("GALLIVM_PERF", "nopt", 0);
   const std::string cache = (std::filesystem::temp_directory_path() / "oblong_vulkan_test_shader_cache").string();
   ::setenv("MESA_SHADER_CACHE_DIR", cache.c_str(), 0);
+  static const vk::DeviceHold device;
 }
 
 // The camera's rays over a W×H grid (pixel centres), then `extra` random rays: from a
@@ -232,6 +238,64 @@ struct StepParity {
   }
 };
 
+// A float `x` moved by k ulps (k > 0: up), for x not 0 and |k| well below its exponent's range.
+float stepUlps(float x, int k) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  bits = uint32_t(int64_t(bits) + (x > 0.0f ? k : -k));
+  std::memcpy(&x, &bits, sizeof bits);
+  return x;
+}
+
+// Rays whose line grazes the traversal's inflated prism (TraversalMesh::prisms): each
+// passes just above the middle of a top edge, rising slowly inwards, so that the wall's
+// s tolerance in prismCrossings (core/kernels/prism.h) takes the crossing and the cap's
+// barycentric one does not. The line then meets the boundary once, and RayPatch hands
+// the ray to the box-only traversal (traversal/PrismGrazes). That window is about 1e-9 of
+// the shell's height wide, finer than a float origin can be placed, so the origin sits
+// close to the edge and one component of the direction is stepped ulp by ulp (a step
+// moves the line by ~1e-4 of an ulp of the origin), by bisection on whether the line
+// still meets the prism, with the prism's own crossings as the judge.
+std::vector<Ray> prismGrazingRays(const Prism& P) {
+  std::vector<Ray> out;
+  for (int e = 0; e < 3; ++e) {
+    const dvec3 A = P.vertex(e, true), B = P.vertex((e + 1) % 3, true), C = P.vertex((e + 2) % 3, true);
+    dvec3 up = glm::normalize(glm::cross(B - A, C - A));
+    if (glm::dot(up, P.dir(0) + P.dir(1) + P.dir(2)) < 0.0) up = -up;
+    const dvec3 M = 0.5 * (A + B);
+    dvec3 away = glm::normalize(glm::cross(B - A, up));
+    if (glm::dot(away, M - C) < 0.0) away = -away;
+    const double L = glm::length(B - A);
+    const vec3 D0 = vec3(glm::normalize(-away + 1e-3 * up));
+    int axis = 0;  // the direction's component that moves the line most along `up`
+    for (int k = 1; k < 3; ++k)
+      if (std::abs(up[k]) > std::abs(up[axis])) axis = k;
+    const int raise = up[axis] > 0.0 ? 1 : -1;
+    for (const double back : {1e-4, 1e-5, 1e-6}) {
+      const vec3 O = vec3(M - back * L * dvec3(D0));
+      auto crossings = [&](int k) {
+        vec3 D = D0;
+        D[axis] = stepUlps(D0[axis], raise * k);
+        Prism::Crossing f, l;
+        return std::pair{P.crossings(dvec3(O), dvec3(D), f, l), D};
+      };
+      // Lowest line (k = lo) meets the prism, highest (k = hi) does not.
+      int lo = -(1 << 20), hi = 1 << 20;
+      if (crossings(lo).first == 0 || crossings(hi).first != 0) continue;
+      while (hi - lo > 1) {
+        const int mid = lo + (hi - lo) / 2;
+        (crossings(mid).first > 0 ? lo : hi) = mid;
+      }
+      const auto [n, D] = crossings(lo);
+      if (n == 1) {
+        out.push_back(Ray{O, D});
+        break;
+      }
+    }
+  }
+  return out;
+}
+
 // One ray, the CPU's intersector against the GPU's report. Embree's part on the CPU: the
 // callback runs when the ray meets the prism's box, and a hit counts when strictly closer
 // than tmax (as the GPU's report). The GPU's BVH may be more conservative than this box
@@ -284,12 +348,13 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
   std::vector<test::Scenario> all = test::scenarios();
   const size_t nPlain = all.size();
   for (test::Scenario& s : test::stiffScenarios()) all.push_back(std::move(s));
-  auto fallbacks = [] {
+  auto statValue = [](const char* name) {
     const std::map<std::string, int64_t> now = Stats::snapshot();
-    const auto it = now.find("newton/Fallbacks");
+    const auto it = now.find(name);
     return it == now.end() ? int64_t(0) : it->second;
   };
-  int pickedFallbacks = 0;
+  auto fallbacks = [&] { return statValue("newton/Fallbacks"); };
+  int pickedFallbacks = 0, pickedGrazes = 0;
   std::map<std::string, int64_t> picking;
   TraversalConfig oracle;
   oracle.baseline = "bruteforce";
@@ -302,7 +367,10 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
     StepParity sp;
     const size_t n = s.tris.size();
     for (size_t k = 0; k < size_t(kTrianglesPerScenario) && k < n; ++k) {
-      const size_t ti = (2 * k + 1) * n / (2 * kTrianglesPerScenario);  // spread over the mesh
+      // Spread over the mesh, odd and even indices alike: the two triangles of a quad
+      // differ (far from the origin, only one of them rejects float inversions).
+      size_t ti = (2 * k + 1) * n / (2 * kTrianglesPerScenario);
+      if (k % 2 == 1 && ti > 0) --ti;
       const DisplacedTriangle& T = s.tris[ti];
       const test::Scenario one{s.name, {T}, s.disp};
       // The canonical configuration (TraversalConfig's defaults: rmip + newton +
@@ -327,6 +395,25 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
         }
         pickedFallbacks += std::min(picked, 4);
         for (const auto& [name, v] : Stats::snapshot()) {  // the picking is not the parity run
+          const auto b = before.find(name);
+          picking[name] += v - (b == before.end() ? 0 : b->second);
+        }
+      }
+      // Rays that graze the inflated prism, picked by the CPU's statistics as above.
+      if (const auto* traversal = dynamic_cast<const TraversalIntersectorBase*>(cpu.get())) {
+        const std::map<std::string, int64_t> before = Stats::snapshot();
+        for (const Ray& r : prismGrazingRays(traversal->mesh().prisms[0])) {
+          if (box.intersect(r).isEmpty()) continue;  // Embree would not call the traversal
+          const int64_t g0 = statValue("traversal/PrismGrazes");
+          RayCounters cw;
+          TriangleHit h;
+          cpu->intersect(r, 0, h, cw);
+          if (statValue("traversal/PrismGrazes") > g0) {
+            cases.push_back({r, 1});  // the grazing family
+            ++pickedGrazes;
+          }
+        }
+        for (const auto& [name, v] : Stats::snapshot()) {
           const auto b = before.find(name);
           picking[name] += v - (b == before.end() ? 0 : b->second);
         }
@@ -392,9 +479,8 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
              delta("traversal/PrismGrazes"), delta("traversal/StackOverflows"), delta("traversal/WideLeaves"),
              delta("traversal/ClippedCells"));
   // The branches these families reach, held: a family change that stops reaching one
-  // would leave that branch's GPU mirror unchecked. Not reached by these families (so
-  // not mirrored by test): rejected inversions and prism grazes; stack overflows are the
-  // shallow-stack test's.
+  // would leave that branch's GPU mirror unchecked (stack overflows are the shallow-stack
+  // test's).
   if (!stats1.empty()) {
     CHECK(delta("newton/Inversions") > 0);
     CHECK(pickedFallbacks > 0);
@@ -403,6 +489,9 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
     CHECK(delta("traversal/BoxOnlyPrisms") > 0);
     CHECK(delta("traversal/IllPosedTriangles") > 0);
     CHECK(delta("traversal/MarchStops") > 0);
+    CHECK(delta("traversal/RejectedInversions") > 0);  // the float inversion's claim refused
+    CHECK(pickedGrazes > 0);
+    CHECK(delta("traversal/PrismGrazes") > 0);  // the box-only traversal of a grazed prism
     CHECK(delta("traversal/ClippedCells") > 0);  // the micro-cells' clip (core/kernels/microcells.h)
   }
   CHECK(total.hits > total.rays / 10);
@@ -1072,3 +1161,4 @@ TEST_CASE("vulkan: tfdm variants the shaders lack are refused", "[vulkan][tfdm][
   tf.traversal.baseline = "tfdm";
   CHECK_THROWS_WITH(vk::VulkanScene(s, tf), Catch::Contains("minmax_mipmap"));
 }
+

@@ -19,6 +19,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <memory>
+#include <mutex>
 
 namespace oblong::vk {
 
@@ -70,8 +72,17 @@ struct Buffer {
   VkDeviceAddress addr = 0;
 };
 
+// A ray-tracing pipeline and its shader binding table's regions.
+struct Pipeline {
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  VkStridedDeviceAddressRegionKHR rgenRegion{}, missRegion{}, hitRegion{}, callRegion{};
+};
+
 }  // namespace
 
+// The instance, the device, its queue and the pipelines: one per process while any
+// Runner (or DeviceHold) holds it (sharedDevice). A scene's buffers, structures and
+// descriptor set are its Runner's (SceneOnDevice).
 struct Device {
   VkInstance instance = VK_NULL_HANDLE;
   VkPhysicalDevice phys = VK_NULL_HANDLE;
@@ -95,22 +106,16 @@ struct Device {
   PFN_vkGetRayTracingShaderGroupHandlesKHR groupHandles = nullptr;
   PFN_vkCmdTraceRaysKHR cmdTraceRays = nullptr;
 
-  std::vector<Buffer> buffers;  // everything allocated, freed in the destructor
-  std::vector<VkAccelerationStructureKHR> structures;
-  VkAccelerationStructureKHR tlas = VK_NULL_HANDLE;
-  Buffer data[OBLONG_BIND_COUNT];  // by binding (0 unused: the TLAS)
-  std::vector<Buffer> texelChunks, rmipChunks;  // OBLONG_BIND_TEXELS, OBLONG_BIND_RMIP_DATA
-  size_t rayCapacity = 0;
-
+  std::vector<Buffer> buffers;  // the shader binding tables, freed in the destructor
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
-  VkDescriptorPool descPool = VK_NULL_HANDLE;
-  VkDescriptorSet set = VK_NULL_HANDLE;
   VkPipelineLayout pipeLayout = VK_NULL_HANDLE;
-  VkPipeline pipeline = VK_NULL_HANDLE;
+  Pipeline pipelines[2];  // [tfdm]: created at first use, then shared by every scene
   std::vector<VkShaderModule> modules;
-  VkStridedDeviceAddressRegionKHR rgenRegion{}, missRegion{}, hitRegion{}, callRegion{};
   VkQueryPool timestamps = VK_NULL_HANDLE;  // 2 queries around each dispatch (none: no timestamps)
   uint32_t timestampBits = 0;
+  // One submission (and its timestamp queries) at a time: scenes share the queue, the
+  // fence and the query pool.
+  std::mutex mutex;
 
   Device() {
     try {  // a constructor that throws runs no destructor: release what was created
@@ -141,6 +146,7 @@ struct Device {
     check(r, "vkCreateInstance");
     pickDevice();
     createDevice();
+    createLayouts();
   }
 
   // The first device (discrete GPUs first, the CPU's lavapipe last) with the ray tracing
@@ -264,15 +270,11 @@ struct Device {
   void destroy() {
     if (device) {
       vkDeviceWaitIdle(device);
-      for (VkAccelerationStructureKHR a : structures) destroyAS(device, a, nullptr);
-      for (Buffer& b : buffers) {
-        vkDestroyBuffer(device, b.buf, nullptr);
-        vkFreeMemory(device, b.mem, nullptr);
-      }
+      freeBuffers(buffers);
       for (VkShaderModule m : modules) vkDestroyShaderModule(device, m, nullptr);
-      if (pipeline) vkDestroyPipeline(device, pipeline, nullptr);
+      for (const Pipeline& p : pipelines)
+        if (p.pipeline) vkDestroyPipeline(device, p.pipeline, nullptr);
       if (pipeLayout) vkDestroyPipelineLayout(device, pipeLayout, nullptr);
-      if (descPool) vkDestroyDescriptorPool(device, descPool, nullptr);
       if (setLayout) vkDestroyDescriptorSetLayout(device, setLayout, nullptr);
       if (fence) vkDestroyFence(device, fence, nullptr);
       if (timestamps) vkDestroyQueryPool(device, timestamps, nullptr);
@@ -280,6 +282,14 @@ struct Device {
       vkDestroyDevice(device, nullptr);
     }
     if (instance) vkDestroyInstance(instance, nullptr);
+  }
+
+  void freeBuffers(std::vector<Buffer>& owned) {
+    for (Buffer& b : owned) {
+      vkDestroyBuffer(device, b.buf, nullptr);
+      vkFreeMemory(device, b.mem, nullptr);
+    }
+    owned.clear();
   }
 
   uint32_t memoryType(uint32_t bits, VkMemoryPropertyFlags need, VkMemoryPropertyFlags prefer) const {
@@ -298,7 +308,9 @@ struct Device {
   // device has such memory: a CPU read of device-local memory mapped through the PCIe
   // BAR is uncached, microseconds per hit record on an NVIDIA H200. Acceleration
   // structures and scratch are device-local.
-  Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host, bool readback = false) {
+  // The buffer joins `owned` (freed by freeBuffers).
+  Buffer makeBuffer(std::vector<Buffer>& owned, VkDeviceSize size, VkBufferUsageFlags usage, bool host,
+                    bool readback = false) {
     Buffer b;
     b.size = std::max<VkDeviceSize>(size, 16);
     VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
@@ -325,27 +337,8 @@ struct Device {
     VkBufferDeviceAddressInfo ai{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
     ai.buffer = b.buf;
     b.addr = vkGetBufferDeviceAddress(device, &ai);
-    buffers.push_back(b);
-    return buffers.back();
-  }
-
-  template <typename T>
-  Buffer upload(const std::vector<T>& v, VkBufferUsageFlags usage) {
-    Buffer b = makeBuffer(v.size() * sizeof(T), usage, true);
-    if (!v.empty()) std::memcpy(b.map, v.data(), v.size() * sizeof(T));
+    owned.push_back(b);
     return b;
-  }
-  // v in buffers of `chunk` elements (at least one buffer, even for an empty v).
-  template <typename T>
-  std::vector<Buffer> uploadChunks(const std::vector<T>& v, size_t chunk, VkBufferUsageFlags usage) {
-    std::vector<Buffer> out;
-    for (size_t at = 0; at < v.size() || out.empty(); at += chunk) {
-      const size_t n = std::min(chunk, v.size() - std::min(at, v.size()));
-      Buffer b = makeBuffer(n * sizeof(T), usage, true);
-      if (n) std::memcpy(b.map, v.data() + at, n * sizeof(T));
-      out.push_back(b);
-    }
-    return out;
   }
 
   void submit(const std::function<void(VkCommandBuffer)>& record) {
@@ -369,44 +362,6 @@ struct Device {
     vkFreeCommandBuffers(device, pool, 1, &cb);
   }
 
-  // Builds one acceleration structure from one geometry; returns it and its bytes.
-  VkAccelerationStructureKHR buildAS(VkAccelerationStructureTypeKHR type, const VkAccelerationStructureGeometryKHR& geom,
-                                     uint32_t count, size_t& bytes) {
-    VkAccelerationStructureBuildGeometryInfoKHR bi{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
-    bi.type = type;
-    bi.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
-    bi.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
-    bi.geometryCount = 1;
-    bi.pGeometries = &geom;
-    VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
-    buildSizes(device, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &bi, &count, &sizes);
-    const Buffer store = makeBuffer(sizes.accelerationStructureSize, VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR, false);
-    bytes = sizes.accelerationStructureSize;
-    VkAccelerationStructureCreateInfoKHR ci{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_CREATE_INFO_KHR};
-    ci.buffer = store.buf;
-    ci.size = sizes.accelerationStructureSize;
-    ci.type = type;
-    VkAccelerationStructureKHR as;
-    check(createAS(device, &ci, nullptr, &as), "vkCreateAccelerationStructureKHR");
-    structures.push_back(as);
-    const VkDeviceSize align = std::max<VkDeviceSize>(asProps.minAccelerationStructureScratchOffsetAlignment, 1);
-    const Buffer scratch = makeBuffer(sizes.buildScratchSize + align, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false);
-    bi.dstAccelerationStructure = as;
-    bi.scratchData.deviceAddress = alignUp(scratch.addr, align);
-    VkAccelerationStructureBuildRangeInfoKHR range{count, 0, 0, 0};
-    const VkAccelerationStructureBuildRangeInfoKHR* ranges = &range;
-    submit([&](VkCommandBuffer cb) {
-      // Earlier builds (the bottom levels a top level reads) complete first.
-      VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-      mb.srcAccessMask = VK_ACCESS_ACCELERATION_STRUCTURE_WRITE_BIT_KHR;
-      mb.dstAccessMask = VK_ACCESS_ACCELERATION_STRUCTURE_READ_BIT_KHR;
-      vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
-                           VK_PIPELINE_STAGE_ACCELERATION_STRUCTURE_BUILD_BIT_KHR, 0, 1, &mb, 0, nullptr, 0, nullptr);
-      cmdBuildAS(cb, 1, &bi, &ranges);
-    });
-    return as;
-  }
-
   VkDeviceAddress address(VkAccelerationStructureKHR as) const {
     VkAccelerationStructureDeviceAddressInfoKHR ai{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_DEVICE_ADDRESS_INFO_KHR};
     ai.accelerationStructure = as;
@@ -423,8 +378,8 @@ struct Device {
     return m;
   }
 
-  // tfdm: the intersection shader of the tfdm baseline (tfdm.rint) instead of prism.rint.
-  void createPipeline(bool tfdm) {
+  // The descriptor set's and the pipeline's layouts (one for both pipelines).
+  void createLayouts() {
     const VkShaderStageFlags all = VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
                                    VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR;
     std::vector<VkDescriptorSetLayoutBinding> binds(OBLONG_BIND_COUNT);
@@ -439,18 +394,6 @@ struct Device {
     lci.bindingCount = uint32_t(binds.size());
     lci.pBindings = binds.data();
     check(vkCreateDescriptorSetLayout(device, &lci, nullptr, &setLayout), "vkCreateDescriptorSetLayout");
-    const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, 1},
-                                           {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, OBLONG_BIND_COUNT - 1 + 2 * (OBLONG_CHUNKS - 1)}};
-    VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    dpci.maxSets = 1;
-    dpci.poolSizeCount = 2;
-    dpci.pPoolSizes = sizes;
-    check(vkCreateDescriptorPool(device, &dpci, nullptr, &descPool), "vkCreateDescriptorPool");
-    VkDescriptorSetAllocateInfo dai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    dai.descriptorPool = descPool;
-    dai.descriptorSetCount = 1;
-    dai.pSetLayouts = &setLayout;
-    check(vkAllocateDescriptorSets(device, &dai, &set), "vkAllocateDescriptorSets");
     VkPushConstantRange pcr{all, 0, sizeof(PushGpu)};
     VkPipelineLayoutCreateInfo plci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     plci.setLayoutCount = 1;
@@ -459,6 +402,13 @@ struct Device {
     plci.pPushConstantRanges = &pcr;
     check(vkCreatePipelineLayout(device, &plci, nullptr, &pipeLayout), "vkCreatePipelineLayout");
 
+  }
+
+  // The pipeline for the canonical traversal (prism.rint) or the tfdm baseline
+  // (tfdm.rint), created at its first use.
+  const Pipeline& pipeline(bool tfdm) {
+    Pipeline& P = pipelines[tfdm ? 1 : 0];
+    if (P.pipeline) return P;
     struct Stage {
       VkShaderStageFlagBits stage;
       const uint32_t* code;
@@ -501,27 +451,149 @@ struct Device {
     rpci.pGroups = groups;
     rpci.maxPipelineRayRecursionDepth = 1;
     rpci.layout = pipeLayout;
-    check(createPipelines(device, VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &rpci, nullptr, &pipeline),
+    check(createPipelines(device, VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &rpci, nullptr, &P.pipeline),
           "vkCreateRayTracingPipelinesKHR");
 
     // Shader binding table: raygen | miss | two hit groups, each region base-aligned.
     const VkDeviceSize hs = rt.shaderGroupHandleSize;
     const VkDeviceSize stride = alignUp(hs, rt.shaderGroupHandleAlignment), base = rt.shaderGroupBaseAlignment;
     std::vector<uint8_t> handles(4 * hs);
-    check(groupHandles(device, pipeline, 0, 4, handles.size(), handles.data()), "vkGetRayTracingShaderGroupHandlesKHR");
+    check(groupHandles(device, P.pipeline, 0, 4, handles.size(), handles.data()),
+          "vkGetRayTracingShaderGroupHandlesKHR");
     const VkDeviceSize rgenSize = alignUp(stride, base), missSize = alignUp(stride, base),
                        hitSize = alignUp(2 * stride, base);
-    const Buffer sbt = makeBuffer(rgenSize + missSize + hitSize + base, VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR, true);
+    const Buffer sbt =
+        makeBuffer(buffers, rgenSize + missSize + hitSize + base, VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR, true);
     const VkDeviceAddress start = alignUp(sbt.addr, base);
     uint8_t* p = static_cast<uint8_t*>(sbt.map) + (start - sbt.addr);
     std::memcpy(p, &handles[0], hs);
     std::memcpy(p + rgenSize, &handles[hs], hs);
     std::memcpy(p + rgenSize + missSize, &handles[2 * hs], hs);
     std::memcpy(p + rgenSize + missSize + stride, &handles[3 * hs], hs);
-    rgenRegion = {start, rgenSize, rgenSize};
-    missRegion = {start + rgenSize, stride, missSize};
-    hitRegion = {start + rgenSize + missSize, stride, hitSize};
-    callRegion = {0, 0, 0};
+    P.rgenRegion = {start, rgenSize, rgenSize};
+    P.missRegion = {start + rgenSize, stride, missSize};
+    P.hitRegion = {start + rgenSize + missSize, stride, hitSize};
+    P.callRegion = {0, 0, 0};
+    return P;
+  }
+};
+
+namespace {
+
+// The process's device: created by the first Runner or DeviceHold, shared by those
+// created while one lives, destroyed with the last. lavapipe compiles a ray-tracing
+// pipeline in seconds (docs/vulkan.md): a test of dozens of small scenes pays it once.
+std::shared_ptr<Device> sharedDevice() {
+  static std::mutex mutex;
+  static std::weak_ptr<Device> current;
+  const std::lock_guard lock(mutex);
+  if (std::shared_ptr<Device> d = current.lock()) return d;
+  auto d = std::make_shared<Device>();
+  current = d;
+  return d;
+}
+
+}  // namespace
+
+// One scene on the shared device: its buffers, acceleration structures and descriptor
+// set, freed with its Runner.
+struct SceneOnDevice {
+  std::shared_ptr<Device> dev;
+  std::vector<Buffer> buffers;
+  std::vector<VkAccelerationStructureKHR> structures;
+  VkAccelerationStructureKHR tlas = VK_NULL_HANDLE;
+  Buffer data[OBLONG_BIND_COUNT];  // by binding (0 unused: the TLAS)
+  std::vector<Buffer> texelChunks, rmipChunks;  // OBLONG_BIND_TEXELS, OBLONG_BIND_RMIP_DATA
+  size_t rayCapacity = 0;
+  VkDescriptorPool descPool = VK_NULL_HANDLE;
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  const Pipeline* pipe = nullptr;
+
+  explicit SceneOnDevice(std::shared_ptr<Device> d) : dev(std::move(d)) {
+    const VkDevice device = dev->device;
+    const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, 1},
+                                           {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, OBLONG_BIND_COUNT - 1 + 2 * (OBLONG_CHUNKS - 1)}};
+    VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    dpci.maxSets = 1;
+    dpci.poolSizeCount = 2;
+    dpci.pPoolSizes = sizes;
+    check(vkCreateDescriptorPool(device, &dpci, nullptr, &descPool), "vkCreateDescriptorPool");
+    VkDescriptorSetAllocateInfo dai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    dai.descriptorPool = descPool;
+    dai.descriptorSetCount = 1;
+    dai.pSetLayouts = &dev->setLayout;
+    check(vkAllocateDescriptorSets(device, &dai, &set), "vkAllocateDescriptorSets");
+  }
+  ~SceneOnDevice() {
+    const VkDevice device = dev->device;
+    const std::lock_guard lock(dev->mutex);
+    vkQueueWaitIdle(dev->queue);
+    for (VkAccelerationStructureKHR a : structures) dev->destroyAS(device, a, nullptr);
+    dev->freeBuffers(buffers);
+    if (descPool) vkDestroyDescriptorPool(device, descPool, nullptr);
+  }
+  SceneOnDevice(const SceneOnDevice&) = delete;
+  SceneOnDevice& operator=(const SceneOnDevice&) = delete;
+
+  Buffer makeBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host, bool readback = false) {
+    return dev->makeBuffer(buffers, size, usage, host, readback);
+  }
+  template <typename T>
+  Buffer upload(const std::vector<T>& v, VkBufferUsageFlags usage) {
+    Buffer b = makeBuffer(v.size() * sizeof(T), usage, true);
+    if (!v.empty()) std::memcpy(b.map, v.data(), v.size() * sizeof(T));
+    return b;
+  }
+  // v in buffers of `chunk` elements (at least one buffer, even for an empty v).
+  template <typename T>
+  std::vector<Buffer> uploadChunks(const std::vector<T>& v, size_t chunk, VkBufferUsageFlags usage) {
+    std::vector<Buffer> out;
+    for (size_t at = 0; at < v.size() || out.empty(); at += chunk) {
+      const size_t n = std::min(chunk, v.size() - std::min(at, v.size()));
+      Buffer b = makeBuffer(n * sizeof(T), usage, true);
+      if (n) std::memcpy(b.map, v.data() + at, n * sizeof(T));
+      out.push_back(b);
+    }
+    return out;
+  }
+
+  // Builds one acceleration structure from one geometry; returns it and its bytes.
+  VkAccelerationStructureKHR buildAS(VkAccelerationStructureTypeKHR type, const VkAccelerationStructureGeometryKHR& geom,
+                                     uint32_t count, size_t& bytes) {
+    VkAccelerationStructureBuildGeometryInfoKHR bi{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
+    bi.type = type;
+    bi.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+    bi.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
+    bi.geometryCount = 1;
+    bi.pGeometries = &geom;
+    VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
+    dev->buildSizes(dev->device, VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &bi, &count, &sizes);
+    const Buffer store =
+        makeBuffer(sizes.accelerationStructureSize, VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR, false);
+    bytes = sizes.accelerationStructureSize;
+    VkAccelerationStructureCreateInfoKHR ci{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_CREATE_INFO_KHR};
+    ci.buffer = store.buf;
+    ci.size = sizes.accelerationStructureSize;
+    ci.type = type;
+    VkAccelerationStructureKHR as;
+    check(dev->createAS(dev->device, &ci, nullptr, &as), "vkCreateAccelerationStructureKHR");
+    structures.push_back(as);
+    const VkDeviceSize align = std::max<VkDeviceSize>(dev->asProps.minAccelerationStructureScratchOffsetAlignment, 1);
+    const Buffer scratch = makeBuffer(sizes.buildScratchSize + align, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false);
+    bi.dstAccelerationStructure = as;
+    bi.scratchData.deviceAddress = alignUp(scratch.addr, align);
+    VkAccelerationStructureBuildRangeInfoKHR range{count, 0, 0, 0};
+    const VkAccelerationStructureBuildRangeInfoKHR* ranges = &range;
+    dev->submit([&](VkCommandBuffer cb) {
+      // Earlier builds (the bottom levels a top level reads) complete first.
+      VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+      mb.srcAccessMask = VK_ACCESS_ACCELERATION_STRUCTURE_WRITE_BIT_KHR;
+      mb.dstAccessMask = VK_ACCESS_ACCELERATION_STRUCTURE_READ_BIT_KHR;
+      vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                           VK_PIPELINE_STAGE_ACCELERATION_STRUCTURE_BUILD_BIT_KHR, 0, 1, &mb, 0, nullptr, 0, nullptr);
+      dev->cmdBuildAS(cb, 1, &bi, &ranges);
+    });
+    return as;
   }
 
   void writeDescriptors() {
@@ -554,7 +626,7 @@ struct Device {
         w[b].pBufferInfo = &infos[b];
       }
     }
-    vkUpdateDescriptorSets(device, uint32_t(w.size()), w.data(), 0, nullptr);
+    vkUpdateDescriptorSets(dev->device, uint32_t(w.size()), w.data(), 0, nullptr);
   }
 };
 
@@ -564,8 +636,10 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
   if (R.meshTriangles.size() != nMeshes || R.meshVertices.size() != nMeshes || R.aabbs.size() != R.tris.size())
     fail("--device vulkan", "internal: inconsistent records ({} meshes, {} / {} sizes, {} prisms, {} boxes)", nMeshes,
          R.meshTriangles.size(), R.meshVertices.size(), R.tris.size(), R.aabbs.size());
-  dev_ = std::make_unique<Device>();
-  Device& D = *dev_;
+  scene_ = std::make_unique<SceneOnDevice>(sharedDevice());
+  SceneOnDevice& S = *scene_;
+  Device& D = *S.dev;
+  std::unique_lock lock(D.mutex);
   VkDeviceSize maxRange = D.props.limits.maxStorageBufferRange;
   // OBLONG_VULKAN_MAX_BUFFER (bytes) lowers the range, to test the chunked layout with
   // small maps.
@@ -593,17 +667,17 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
   for (MeshGpu& m : R.meshes) m.chunkShift = chunkShift;
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   const VkBufferUsageFlags asInput = VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR;
-  D.data[OBLONG_BIND_TRIANGLES] = D.upload(R.tris, ssbo);
-  D.data[OBLONG_BIND_MESHES] = D.upload(R.meshes, ssbo);
-  D.texelChunks = D.uploadChunks(R.texels, chunk, ssbo);
-  D.rmipChunks = D.uploadChunks(R.rmipData, chunk, ssbo);
+  S.data[OBLONG_BIND_TRIANGLES] = S.upload(R.tris, ssbo);
+  S.data[OBLONG_BIND_MESHES] = S.upload(R.meshes, ssbo);
+  S.texelChunks = S.uploadChunks(R.texels, chunk, ssbo);
+  S.rmipChunks = S.uploadChunks(R.rmipData, chunk, ssbo);
   std::vector<float>().swap(R.texels);  // the device has them now
   std::vector<uint32_t>().swap(R.rmipData);
-  D.data[OBLONG_BIND_RMIP_LAYERS] = D.upload(R.rmipLayers, ssbo);
-  D.data[OBLONG_BIND_PLAIN_INDEX] = D.upload(R.plainIndex, ssbo | asInput);
-  D.data[OBLONG_BIND_PLAIN_UV] = D.upload(R.plainUV, ssbo);
-  D.data[OBLONG_BIND_PLAIN_POS] = D.upload(R.plainPos, ssbo | asInput);
-  const Buffer aabbBuf = D.upload(R.aabbs, asInput);
+  S.data[OBLONG_BIND_RMIP_LAYERS] = S.upload(R.rmipLayers, ssbo);
+  S.data[OBLONG_BIND_PLAIN_INDEX] = S.upload(R.plainIndex, ssbo | asInput);
+  S.data[OBLONG_BIND_PLAIN_UV] = S.upload(R.plainUV, ssbo);
+  S.data[OBLONG_BIND_PLAIN_POS] = S.upload(R.plainPos, ssbo | asInput);
+  const Buffer aabbBuf = S.upload(R.aabbs, asInput);
 
   // Bottom levels: one per mesh (AABBs per prism, or triangles), then the top level.
   size_t blasBytes = 0;
@@ -624,14 +698,14 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
       auto& t = g.geometry.triangles;
       t = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR};
       t.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
-      t.vertexData.deviceAddress = D.data[OBLONG_BIND_PLAIN_POS].addr + VkDeviceSize(m.vertexOffset) * 12;
+      t.vertexData.deviceAddress = S.data[OBLONG_BIND_PLAIN_POS].addr + VkDeviceSize(m.vertexOffset) * 12;
       t.vertexStride = 12;
       t.maxVertex = std::max<uint32_t>(R.meshVertices[mi], 1) - 1;
       t.indexType = VK_INDEX_TYPE_UINT32;
-      t.indexData.deviceAddress = D.data[OBLONG_BIND_PLAIN_INDEX].addr + VkDeviceSize(m.indexOffset) * 4;
+      t.indexData.deviceAddress = S.data[OBLONG_BIND_PLAIN_INDEX].addr + VkDeviceSize(m.indexOffset) * 4;
     }
     size_t bytes = 0;
-    const VkAccelerationStructureKHR blas = D.buildAS(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, count, bytes);
+    const VkAccelerationStructureKHR blas = S.buildAS(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g, count, bytes);
     blasBytes += bytes;
     VkAccelerationStructureInstanceKHR inst{};
     // The identity: prisms' boxes and plain triangles are in the world; the intersection
@@ -644,17 +718,17 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
     inst.accelerationStructureReference = D.address(blas);
     instances.push_back(inst);
   }
-  const Buffer instBuf = D.upload(instances, asInput);
+  const Buffer instBuf = S.upload(instances, asInput);
   VkAccelerationStructureGeometryKHR tg{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
   tg.geometryType = VK_GEOMETRY_TYPE_INSTANCES_KHR;
   tg.geometry.instances = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR};
   tg.geometry.instances.data.deviceAddress = instBuf.addr;
   size_t tlasBytes = 0;
-  D.tlas = D.buildAS(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, tg, uint32_t(instances.size()), tlasBytes);
+  S.tlas = S.buildAS(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, tg, uint32_t(instances.size()), tlasBytes);
 
   bool tfdm = false;
   for (const MeshGpu& m : R.meshes) tfdm = tfdm || m.method == OBLONG_METHOD_TFDM;
-  D.createPipeline(tfdm);
+  S.pipe = &D.pipeline(tfdm);
   memory_ = {{"vulkan/triangles", R.triBytes},
              {tfdm ? "vulkan/tfdm_mipmap" : "vulkan/rmip_layers", R.rmipBytes},
              {"vulkan/height_maps", R.texelBytes},
@@ -665,6 +739,7 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
   // lavapipe compiles the pipeline at its first dispatch (tens of seconds for the
   // intersection shader unless Mesa's shader cache has it): one ray here, so that the
   // compilation counts as build time, not as tracing time.
+  lock.unlock();
   RayGpu warm{vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), 0.0f, 0.0f};
   HitGpu hit;
   trace(&warm, 1, &hit, nullptr, false);
@@ -672,33 +747,38 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
 
 Runner::~Runner() = default;
 
-std::string Runner::deviceName() const { return dev_->props.deviceName; }
-std::string Runner::driverInfo() const { return dev_->driverInfo; }
+DeviceHold::DeviceHold() : device_(sharedDevice()) {}
+DeviceHold::~DeviceHold() = default;
+
+std::string Runner::deviceName() const { return scene_->dev->props.deviceName; }
+std::string Runner::driverInfo() const { return scene_->dev->driverInfo; }
 
 void Runner::trace(const RayGpu* rays, size_t n, HitGpu* hits, CountersGpu* counters, bool anyHit, double* seconds,
                    double* gpuSeconds) {
-  Device& D = *dev_;
+  SceneOnDevice& S = *scene_;
+  Device& D = *S.dev;
   for (size_t i = 0; i < n; ++i)
     if (!(rays[i].tmin >= 0.0f))
       fail("--device vulkan", "ray {}: tmin = {} < 0 (Vulkan needs tmin >= 0)", i, rays[i].tmin);
+  const std::lock_guard lock(D.mutex);
   // Batches of at most 2^20 rays (32 MiB per buffer, within any storage buffer range).
   const size_t batch = std::min<size_t>({size_t(1) << 20, D.props.limits.maxStorageBufferRange / sizeof(HitGpu),
                                          D.rt.maxRayDispatchInvocationCount});
-  if (D.rayCapacity == 0 || std::min(n, batch) > D.rayCapacity) {  // grow (old buffers are freed with the device)
+  if (S.rayCapacity == 0 || std::min(n, batch) > S.rayCapacity) {  // grow (old buffers are freed with the scene)
     const size_t cap = std::max<size_t>(std::min(n, batch), 1);
-    D.data[OBLONG_BIND_RAYS] = D.makeBuffer(cap * sizeof(RayGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
-    D.data[OBLONG_BIND_HITS] = D.makeBuffer(cap * sizeof(HitGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, true);
-    D.data[OBLONG_BIND_COUNTERS] = D.makeBuffer(cap * sizeof(CountersGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, true);
-    D.rayCapacity = cap;
-    D.writeDescriptors();
+    S.data[OBLONG_BIND_RAYS] = S.makeBuffer(cap * sizeof(RayGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
+    S.data[OBLONG_BIND_HITS] = S.makeBuffer(cap * sizeof(HitGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, true);
+    S.data[OBLONG_BIND_COUNTERS] = S.makeBuffer(cap * sizeof(CountersGpu), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, true);
+    S.rayCapacity = cap;
+    S.writeDescriptors();
   }
   double total = 0, gpu = 0;
   const double tickSeconds = double(D.props.limits.timestampPeriod) * 1e-9;
   const uint64_t tickMask = D.timestampBits >= 64 ? ~uint64_t(0) : (uint64_t(1) << D.timestampBits) - 1;
-  for (size_t off = 0; off < n; off += D.rayCapacity) {
-    const size_t m = std::min(D.rayCapacity, n - off);
-    std::memcpy(D.data[OBLONG_BIND_RAYS].map, rays + off, m * sizeof(RayGpu));
-    std::memset(D.data[OBLONG_BIND_COUNTERS].map, 0, m * sizeof(CountersGpu));
+  for (size_t off = 0; off < n; off += S.rayCapacity) {
+    const size_t m = std::min(S.rayCapacity, n - off);
+    std::memcpy(S.data[OBLONG_BIND_RAYS].map, rays + off, m * sizeof(RayGpu));
+    std::memset(S.data[OBLONG_BIND_COUNTERS].map, 0, m * sizeof(CountersGpu));
     const PushGpu push{0u, uint32_t(m), anyHit ? 1u : 0u, 0u};
     const auto start = std::chrono::steady_clock::now();
     D.submit([&](VkCommandBuffer cb) {
@@ -706,13 +786,14 @@ void Runner::trace(const RayGpu* rays, size_t n, HitGpu* hits, CountersGpu* coun
         vkCmdResetQueryPool(cb, D.timestamps, 0, 2);
         vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, D.timestamps, 0);
       }
-      vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR, D.pipeline);
-      vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR, D.pipeLayout, 0, 1, &D.set, 0, nullptr);
+      vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR, S.pipe->pipeline);
+      vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR, D.pipeLayout, 0, 1, &S.set, 0, nullptr);
       vkCmdPushConstants(cb, D.pipeLayout,
                          VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
                              VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR,
                          0, sizeof push, &push);
-      D.cmdTraceRays(cb, &D.rgenRegion, &D.missRegion, &D.hitRegion, &D.callRegion, push.rayCount, 1, 1);
+      const Pipeline& P = *S.pipe;
+      D.cmdTraceRays(cb, &P.rgenRegion, &P.missRegion, &P.hitRegion, &P.callRegion, push.rayCount, 1, 1);
       if (D.timestamps) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, D.timestamps, 1);
     });
     total += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -723,8 +804,8 @@ void Runner::trace(const RayGpu* rays, size_t n, HitGpu* hits, CountersGpu* coun
             "vkGetQueryPoolResults");
       gpu += double((ticks[1] - ticks[0]) & tickMask) * tickSeconds;
     }
-    std::memcpy(hits + off, D.data[OBLONG_BIND_HITS].map, m * sizeof(HitGpu));
-    if (counters) std::memcpy(counters + off, D.data[OBLONG_BIND_COUNTERS].map, m * sizeof(CountersGpu));
+    std::memcpy(hits + off, S.data[OBLONG_BIND_HITS].map, m * sizeof(HitGpu));
+    if (counters) std::memcpy(counters + off, S.data[OBLONG_BIND_COUNTERS].map, m * sizeof(CountersGpu));
   }
   if (seconds) *seconds = total;
   if (gpuSeconds) *gpuSeconds = D.timestamps ? gpu : -1.0;

@@ -15,11 +15,27 @@
 
 namespace oblong::vk {
 
-struct Device;  // instance, device, pipeline (runner.cpp)
+struct Device;         // instance, device, queue, pipelines (runner.cpp)
+struct SceneOnDevice;  // one scene's buffers, acceleration structures, descriptor set
+
+// Keeps the process's Vulkan device, and the pipelines compiled on it, alive while it
+// lives. Runners share one device (and one pipeline per intersection shader) with every
+// Runner or DeviceHold alive when they are made; without one, each Runner made after
+// the last one died creates the device and compiles the pipeline again (seconds on
+// lavapipe). Throws as Runner does when no device supports ray tracing.
+class DeviceHold {
+ public:
+  DeviceHold();
+  ~DeviceHold();
+
+ private:
+  std::shared_ptr<Device> device_;
+};
 
 class Runner {
  public:
-  // Takes the records (the large arrays are freed once on the device). Throws
+  // Takes the records (the large arrays are freed once on the device), on the process's
+  // shared device (DeviceHold). One thread traces at a time per device. Throws
   // oblong::Error with one line when no Vulkan device supports ray tracing or the
   // records do not fit the device's limits.
   explicit Runner(GpuRecords records);
@@ -41,7 +57,7 @@ class Runner {
   const std::vector<std::pair<std::string, size_t>>& memory() const { return memory_; }
 
  private:
-  std::unique_ptr<Device> dev_;
+  std::unique_ptr<SceneOnDevice> scene_;
   std::string geometryName_;
   uint64_t baseTriangles_ = 0;
   std::vector<std::pair<std::string, size_t>> memory_;
