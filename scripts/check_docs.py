@@ -14,16 +14,22 @@ Checks, printing one line per offence and exiting 1:
   - nothing points outside the repository: `../shared`, `shared/papers`, `papers/…`,
     the external design notes (`DESIGN §…`, `DESIGN.md`);
   - no issue-tracker numbers ("issue 4", "issues 3–4", "issue #7") in any Markdown
-    heading or anywhere in source files, and no dates in the reference pages' headings.
+    heading or anywhere in source files, and no dates in the reference pages' headings;
+  - every experiments/NAME/ folder with a summary.json and a README.md has exactly one
+    result block in the README, and it reads as experiments/lib/readme.py writes it from
+    that summary.json (the numbers a README quotes come from its results: a stale or
+    hand-edited block fails; `experiments/run_all --readmes` rewrites the blocks).
 
     python3 scripts/check_docs.py [--root DIR]
 """
 import argparse
 import glob
+import importlib.util
 import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 SOURCE = re.compile(r"\.(h|hpp|cpp|cc|glsl|rgen|rint|rchit|rahit|rmiss|comp|py|sh|cmake)$|(^|/)(CMakeLists\.txt|run_all|run)$")
 LINK = re.compile(r"(?<!!)\[(?:[^\]\[]|\[[^\]]*\])*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)|!\[[^\]]*\]\(([^)\s]+)\)")
@@ -114,6 +120,27 @@ def path_words(text, tops):
             yield w
 
 
+def experiment_readmes(root, files):
+    """Problems of the experiments' README result blocks, one line each, and how many were checked."""
+    def names(leaf):
+        return {f.split("/")[1] for f in files if re.fullmatch(r"experiments/[^/]+/" + re.escape(leaf), f)}
+
+    folders = sorted(names("summary.json") & names("README.md"))
+    if not folders:
+        return [], 0
+    lib = os.path.join(root, "experiments", "lib", "readme.py")
+    if not os.path.isfile(lib):
+        return [f"experiments/lib/readme.py: missing, so {len(folders)} experiments' result blocks go unchecked"], 0
+    # Loaded by path: the tree under check defines the block, and no other `readme` module can stand in.
+    spec = importlib.util.spec_from_file_location("oblong_experiments_readme", lib)
+    readme = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(readme)
+    out = []
+    for name in folders:
+        out += readme.check_readme(Path(root) / "experiments" / name)
+    return out, len(folders)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--root", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
@@ -193,12 +220,16 @@ def main():
                 if missing:
                     bad(where, f"cites a path that does not exist: {', '.join(missing)}")
 
+    results, checked = experiment_readmes(root, files)
+    problems += results
+
     for p in problems:
         print(p)
     if problems:
         print(f"check_docs: {len(problems)} problem(s) in {len(markdown)} Markdown and the source files")
         return 1
-    print(f"check_docs: {len(markdown)} Markdown files and the sources: links, paths and headings in order")
+    print(f"check_docs: {len(markdown)} Markdown files and the sources: links, paths and headings in order; "
+          f"{checked} experiment READMEs' result blocks match their summary.json")
     return 0
 
 
