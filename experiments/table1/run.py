@@ -1,10 +1,13 @@
 #!/usr/bin/python3
 """Table 1 of the RMIP paper on this CPU: per scene, TFDM (1x), pre-tessellation and the
 canonical configuration at low / normal / high RMIP resolution; memory ratio and
-render-time speed-up over TFDM, camera rays and path tracing.
+render-time speed-up over TFDM, camera rays and path tracing, and trace-time speed-up on
+grazing rays (bench_traversal's family: within 0.5-6 degrees of the base surface, aimed
+into the shell; the paper has no such column).
 
     /usr/bin/python3 experiments/table1/run.py [--quick] [--build DIR] [--out DIR] [--reps N]
 """
+import subprocess
 import sys
 from pathlib import Path
 
@@ -37,7 +40,7 @@ def plot(rows: list, out) -> None:
     # Plot: speed-up over TFDM per scene (camera rays, path tracing) and memory ratio.
     plt = C.plt()
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-    fig, axes = plt.subplots(1, 3, figsize=(12, 3.6))
+    fig, axes = plt.subplots(1, 4, figsize=(16, 3.6))
     cols = COLS
     colors = {"tfdm_world": "tab:purple", "driver_mipmap": "tab:blue", "tessellated": "0.6", "rmip_low": "tab:green",
               "rmip_normal": "tab:orange", "rmip_high": "tab:red"}
@@ -45,7 +48,7 @@ def plot(rows: list, out) -> None:
 
     def row(sc, integ, cfg):
         return next(r for r in rows if r["scene"] == sc and r["integrator"] == integ and r["config"] == cfg)
-    for ax, integ in zip(axes[:2], sizes):
+    for ax, integ in zip(axes[:3], sizes):
         for i, cfg in enumerate(cols):
             xs, ys, lo, hi = [], [], [], []
             for j, sc in enumerate(names):
@@ -65,9 +68,10 @@ def plot(rows: list, out) -> None:
         ax.yaxis.set_minor_formatter(NullFormatter())
         ax.set_xticks(range(len(names)), names, rotation=20, fontsize=7)
         ax.set_ylabel("speed-up over TFDM (median, range)")
-        ax.set_title(f"{integ} ({sizes[integ]}, 1 spp, 1 thread)")
+        ax.set_title(f"{integ} ({sizes[integ]}, 1 thread)" if integ == "grazing"
+                     else f"{integ} ({sizes[integ]}, 1 spp, 1 thread)")
         ax.grid(True, axis="y", which="both", alpha=0.3)
-    ax = axes[2]
+    ax = axes[3]
     for i, cfg in enumerate(cols):
         pts = [(j + (i - 2.5) * wbar, row(sc, "primary", cfg)) for j, sc in enumerate(names)]
         pts = [(x, r) for x, r in pts if r["fits"]]
@@ -88,16 +92,32 @@ def plot(rows: list, out) -> None:
     fig.savefig(out / "table1.png", bbox_inches="tight")
 
 
+def grazing_rays(ctx, scene: str, n: int) -> Path:
+    """bench_traversal's grazing family on the scene, as a ray file for `oblong trace`."""
+    out = ctx.tmp(f"{C.short(scene)}_grazing.bin")
+    bench = ctx.binary.parent / "bench_traversal"
+    if not bench.exists():
+        raise C.ExperimentError(f"{bench} missing (the benchmarks' build: cmake --build "
+                                f"{ctx.binary.parent} --target bench_traversal)")
+    subprocess.run([str(bench), "--scene", str(C.scene_path(scene)), "--grazing", str(n), "--write-grazing",
+                    str(out)], check=True, cwd=C.ROOT, capture_output=True, timeout=600)
+    return out
+
+
 def run(ctx):
     scenes = ctx.pick(C.PAPER_SCENES, ["paper/terracotta_roof"])
-    sizes = {"primary": ctx.pick("256x192", "32x24"), "path": ctx.pick("128x96", "16x12")}
+    n_grazing = ctx.pick(20000, 500)
+    sizes = {"primary": ctx.pick("256x192", "32x24"), "path": ctx.pick("128x96", "16x12"),
+             "grazing": f"{n_grazing} rays"}
     reps = ctx.reps(3, 1)
     jobs = []
     meta, tess = {}, {}
+    grazing = {}
     for s in scenes:
         doc = C.load_scene(C.scene_path(s))
         w, h = C.map_size(doc)
         tess[s] = C.tessellation_fit(ctx, C.scene_path(s))
+        grazing[s] = grazing_rays(ctx, s, n_grazing)
         for cfg in CONFIGS:
             if cfg.startswith("rmip_"):
                 level = cfg[5:]
@@ -123,7 +143,11 @@ def run(ctx):
                 args = list(args)
                 meta[(s, cfg)] = ""
             for integ, size in sizes.items():
-                jobs.append(((s, cfg, integ), "render", scene, args + ["--integrator", integ, "--size", size]))
+                if integ == "grazing":  # the same rays for every configuration (the base geometry's)
+                    jobs.append(((s, cfg, integ), "trace", scene,
+                                 args + ["--rays", grazing[s], "-o", ctx.tmp("grazing_hits.bin"), "-q"]))
+                else:
+                    jobs.append(((s, cfg, integ), "render", scene, args + ["--integrator", integ, "--size", size]))
     ctx.log(f"{len(jobs)} configurations x {reps} rounds")
     res = C.interleaved(ctx, [("|".join(k), sub, sc, a) for k, sub, sc, a in jobs], reps)
     runs = {tuple(k.split("|")): v for k, v in res.items()}
@@ -147,7 +171,7 @@ def run(ctx):
                 sp = C.paired_ratios(base, rs)
                 lo, hi = C.spread(sp)
                 secs = [r.seconds for r in rs]
-                rays = st["rays"]["primary"] + st["rays"]["secondary"]
+                rays = st["rays"]["count"] if integ == "grazing" else st["rays"]["primary"] + st["rays"]["secondary"]
                 rows.append({
                     "scene": C.short(s), "integrator": integ, "size": sizes[integ], "config": cfg, "fits": True,
                     "geometry": st["geometry"], "rmip": meta[(s, cfg)],
@@ -219,7 +243,9 @@ def run(ctx):
                f"mean ×{num['mean_speedup_rmip_normal_path']:.2f} (sd {num['sd_speedup_rmip_normal_path']:.2f}, "
                f"geomean ×{num['geomean_speedup_rmip_normal_path']:.2f}) path-traced, mean "
                f"×{num['mean_speedup_rmip_normal_primary']:.2f} (geomean "
-               f"×{num['geomean_speedup_rmip_normal_primary']:.2f}) camera rays, against the paper's ×5 (sd 3) on "
+               f"×{num['geomean_speedup_rmip_normal_primary']:.2f}) camera rays, mean "
+               f"×{num['mean_speedup_rmip_normal_grazing']:.2f} (geomean "
+               f"×{num['geomean_speedup_rmip_normal_grazing']:.2f}) grazing rays, against the paper's ×5 (sd 3) on "
                f"GPU; RMIP low (memory ×{min(meml):.3f}–{max(meml):.3f}) ×{num['geomean_speedup_rmip_low_path']:.2f},"
                f" RMIP high ×{num['geomean_speedup_rmip_high_path']:.2f} (geomeans, path); "
                f"{C.TFDM_WORLD_LABEL} ×{num['geomean_speedup_tfdm_world_path']:.2f} (path) / "

@@ -14,6 +14,9 @@
 //       --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //       --benchmark_out=out.json --benchmark_out_format=json
 //   /usr/bin/python3 experiments/traversal/summarize.py out.json
+//   ./build/bench_traversal --scene S --grazing N --write-grazing FILE.bin
+//       writes the grazing family as a ray file for `oblong trace --rays` and exits
+//       (experiments/table1 traces it with every configuration).
 //
 // Build with -DOBLONG_STATS=OFF for timings (the per-ray RayCounters stay: they are
 // plain integer increments on the ray's own struct).
@@ -22,6 +25,7 @@
 #include "render/camera.h"
 #include "core/error.h"
 #include "render/embree_scene.h"
+#include "render/rays_io.h"
 #include "render/sampling.h"
 #include "tests/fixtures/grazing_rays.h"
 
@@ -176,9 +180,11 @@ void trace(benchmark::State& state, const Config& c, const std::vector<Ray>& (*f
 int main(int argc, char** argv) {
   // Our own flags first; the rest go to Google Benchmark.
   std::vector<char*> rest{argv[0]};
+  const char* writeGrazing = nullptr;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--scene") && i + 1 < argc) gScene = argv[++i];
     else if (!std::strcmp(argv[i], "--grazing") && i + 1 < argc) gGrazing = std::max(0, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--write-grazing") && i + 1 < argc) writeGrazing = argv[++i];
     else if (!std::strcmp(argv[i], "--size") && i + 1 < argc) {
       if (std::sscanf(argv[++i], "%dx%d", &gSize.x, &gSize.y) != 2 || gSize.x <= 0 || gSize.y <= 0) {
         eprint("bench_traversal: --size: expected WxH, got '{}'\n", argv[i]);
@@ -189,6 +195,10 @@ int main(int argc, char** argv) {
   int n = int(rest.size());
   try {
     scene();
+    if (writeGrazing) {
+      writeRays(writeGrazing, grazing());
+      return 0;
+    }
   } catch (const std::exception& e) {
     eprint("bench_traversal: {}\n", e.what());
     return 1;
