@@ -407,8 +407,9 @@ struct Device {
   // The pipeline for the canonical traversal (prism.rint) or the tfdm baseline
   // (tfdm.rint), created at its first use.
   const Pipeline& pipeline(bool tfdm) {
-    Pipeline& P = pipelines[tfdm ? 1 : 0];
-    if (P.pipeline) return P;
+    if (pipelines[tfdm ? 1 : 0].pipeline) return pipelines[tfdm ? 1 : 0];
+    // Built aside and stored whole: a failure half-way leaves no half-made pipeline to reuse.
+    Pipeline P;
     struct Stage {
       VkShaderStageFlagBits stage;
       const uint32_t* code;
@@ -458,12 +459,18 @@ struct Device {
     const VkDeviceSize hs = rt.shaderGroupHandleSize;
     const VkDeviceSize stride = alignUp(hs, rt.shaderGroupHandleAlignment), base = rt.shaderGroupBaseAlignment;
     std::vector<uint8_t> handles(4 * hs);
-    check(groupHandles(device, P.pipeline, 0, 4, handles.size(), handles.data()),
-          "vkGetRayTracingShaderGroupHandlesKHR");
     const VkDeviceSize rgenSize = alignUp(stride, base), missSize = alignUp(stride, base),
                        hitSize = alignUp(2 * stride, base);
-    const Buffer sbt =
-        makeBuffer(buffers, rgenSize + missSize + hitSize + base, VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR, true);
+    Buffer sbt;
+    try {
+      check(groupHandles(device, P.pipeline, 0, 4, handles.size(), handles.data()),
+            "vkGetRayTracingShaderGroupHandlesKHR");
+      sbt = makeBuffer(buffers, rgenSize + missSize + hitSize + base, VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR,
+                       true);
+    } catch (...) {
+      vkDestroyPipeline(device, P.pipeline, nullptr);
+      throw;
+    }
     const VkDeviceAddress start = alignUp(sbt.addr, base);
     uint8_t* p = static_cast<uint8_t*>(sbt.map) + (start - sbt.addr);
     std::memcpy(p, &handles[0], hs);
@@ -474,7 +481,7 @@ struct Device {
     P.missRegion = {start + rgenSize, stride, missSize};
     P.hitRegion = {start + rgenSize + missSize, stride, hitSize};
     P.callRegion = {0, 0, 0};
-    return P;
+    return pipelines[tfdm ? 1 : 0] = P;
   }
 };
 
@@ -522,7 +529,10 @@ struct SceneOnDevice {
     dai.descriptorPool = descPool;
     dai.descriptorSetCount = 1;
     dai.pSetLayouts = &dev->setLayout;
-    check(vkAllocateDescriptorSets(device, &dai, &set), "vkAllocateDescriptorSets");
+    if (const VkResult r = vkAllocateDescriptorSets(device, &dai, &set); r != VK_SUCCESS) {
+      vkDestroyDescriptorPool(device, descPool, nullptr);  // a throwing constructor runs no destructor
+      check(r, "vkAllocateDescriptorSets");
+    }
   }
   ~SceneOnDevice() {
     const VkDevice device = dev->device;
