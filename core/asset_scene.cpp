@@ -53,10 +53,12 @@ struct Material {
 // others that differ from it are named in a warning.
 Material pickMaterial(const std::string& path, const std::vector<Material>& used) {
   const auto chosen = std::find_if(used.begin(), used.end(), [](const Material& m) { return !m.map.empty(); });
-  const Material pick = chosen != used.end() ? *chosen : used.front();
+  const Material& pick = chosen != used.end() ? *chosen : used.front();
   std::vector<std::string> others;
+  // By identity, not name: two materials of one name may differ.
   for (const Material& m : used)
-    if (m.name != pick.name && !m.sameAs(pick)) others.push_back("'" + m.name + "'");
+    if (&m != &pick && !m.sameAs(pick))
+      others.push_back(m.name == pick.name ? "another '" + m.name + "'" : "'" + m.name + "'");
   if (!others.empty())
     eprint("oblong: warning: {}: oblong applies one material to a whole mesh file: '{}'; not used: {} (write a "
            "scene file with one mesh file per material)\n",
@@ -101,6 +103,7 @@ struct MtlLine {
 struct MtlMaterial {
   std::string name, file;
   std::vector<MtlLine> lines;
+  int line = 0;  // of its newmtl
 };
 
 // The materials of one .mtl file by name.
@@ -118,8 +121,11 @@ std::map<std::string, MtlMaterial> readMtl(const std::string& file) {
     if (t[0] == "newmtl") {
       const std::string name = restOf(text, "newmtl");
       if (name.empty()) fail(file, "line {}: newmtl: no material name", n);
+      if (const auto it = out.find(name); it != out.end())
+        eprint("oblong: warning: {}: line {}: newmtl {}: defined again (first at line {}); this definition is used\n",
+               file, n, name, it->second.line);
       cur = &out[name];
-      *cur = MtlMaterial{name, file, {}};
+      *cur = MtlMaterial{name, file, {}, n};
       continue;
     }
     if (!cur) fail(file, "line {}: {}: before any newmtl", n, t[0]);
@@ -340,8 +346,15 @@ json readGltfJson(const std::string& path, bool glb) {
     s << in.rdbuf();
     text = s.str();
   }
+  // Nesting is bounded while parsing (as for scene files): copying or printing a value
+  // recurses, and a value nested 100 000 deep overflowed the stack in an error message.
+  constexpr int kMaxDepth = 64;
+  const auto bounded = [&](int depth, json::parse_event_t, json&) {
+    if (depth > kMaxDepth) fail(path, "malformed glTF: nested deeper than {} levels", kMaxDepth);
+    return true;
+  };
   try {
-    return json::parse(text);
+    return json::parse(text, bounded);
   } catch (const json::exception& e) {
     fail(path, "malformed glTF JSON: {}", e.what());
   }
@@ -462,6 +475,7 @@ Material fromGltfMaterial(const std::string& path, const json& doc, size_t index
         fail(path, "{}: an image inside the file (bufferView) is not supported: store the map as an image file "
              "next to it and give its uri", iKey);
       const std::string uri = image["uri"].get<std::string>();
+      if (uri.empty()) fail(path, "{}.uri: is empty: give the displacement map's file name", iKey);
       if (uri.rfind("data:", 0) == 0)
         fail(path, "{}.uri: a data URI is not supported: store the map as an image file next to it", iKey);
       if (uri.find("://") != std::string::npos) fail(path, "{}.uri: {}: only relative file names are supported", iKey, shown(uri));

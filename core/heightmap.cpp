@@ -228,7 +228,7 @@ void checkLengths(const std::string& path) {
 }
 }  // namespace
 
-HeightMap HeightMap::load(const std::string& path, bool flipV) {
+ImageRead readImageFile(const std::string& path, int channels, int64_t maxPixels, const std::string& what) {
   // Checked first: OpenImageIO would block on a FIFO or read a device forever.
   checkInputFile(path);
   checkLengths(path);
@@ -243,19 +243,24 @@ HeightMap HeightMap::load(const std::string& path, bool flipV) {
     if (err.empty()) err = oneLine(capture.release());
     if (err.empty()) err = "cannot open image";
     // OIIO prefixes its messages with the file name already in some versions.
-    fail(path, "cannot read displacement map ({})", err);
+    fail(path, "cannot read {} ({})", what, err);
   }
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
     fail(path, "image has no pixels");
-  if (spec.depth > 1) fail(path, "3D (volume) images are not displacement maps");
+  if (spec.depth > 1) fail(path, "3D (volume) images are not {}s", what);
+  const int C = channels > 0 ? std::min(channels, spec.nchannels) : spec.nchannels;
   // A corrupt header must not turn into a huge allocation (std::bad_alloc is no message).
-  if (spec.width > kMaxSide || spec.height > kMaxSide || int64_t(spec.width) * spec.height > kMaxTexels)
-    fail(path, "image is {}x{}: larger than the supported {}x{} or {} texels", spec.width, spec.height, kMaxSide,
-         kMaxSide, kMaxTexels);
+  if (spec.width > HeightMap::kMaxSide || spec.height > HeightMap::kMaxSide ||
+      int64_t(spec.width) * spec.height > maxPixels || C > 64)
+    fail(path, "image is {}x{} with {} channels: larger than the supported {}x{}, {} pixels or 64 channels",
+         spec.width, spec.height, C, HeightMap::kMaxSide, HeightMap::kMaxSide, maxPixels);
   checkPixelsFit(path, *in, spec);
-  std::vector<float> texels(size_t(spec.width) * size_t(spec.height));
-  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, texels.data())) {
+  ImageRead r;
+  r.width = spec.width, r.height = spec.height, r.channels = C;
+  r.colorSpace = spec.get_string_attribute("oiio:ColorSpace");
+  r.px.resize(size_t(spec.width) * size_t(spec.height) * size_t(C));
+  if (!in->read_image(0, 0, 0, C, OIIO::TypeDesc::FLOAT, r.px.data())) {
     std::string err = oneLine(in->geterror());
     if (err.empty()) err = oneLine(capture.release());
     fail(path, "cannot read pixels ({})", err.empty() ? "unknown error" : err);
@@ -264,13 +269,19 @@ HeightMap HeightMap::load(const std::string& path, bool flipV) {
   // A library's own complaint about a file that did load: one warning line.
   if (const std::string said = oneLine(capture.release()); !said.empty())
     eprint("oblong: warning: {}: {}\n", path, said);
+  return r;
+}
+
+HeightMap HeightMap::load(const std::string& path, bool flipV) {
+  ImageRead img = readImageFile(path, 1, kMaxTexels, "displacement map");
+  std::vector<float> texels = std::move(img.px);
   if (flipV) {
-    for (int j = 0; j < spec.height / 2; ++j)
-      std::swap_ranges(texels.begin() + size_t(j) * spec.width,
-                       texels.begin() + size_t(j + 1) * spec.width,
-                       texels.begin() + size_t(spec.height - 1 - j) * spec.width);
+    for (int j = 0; j < img.height / 2; ++j)
+      std::swap_ranges(texels.begin() + size_t(j) * img.width,
+                       texels.begin() + size_t(j + 1) * img.width,
+                       texels.begin() + size_t(img.height - 1 - j) * img.width);
   }
-  return HeightMap(spec.width, spec.height, std::move(texels), path);
+  return HeightMap(img.width, img.height, std::move(texels), path);
 }
 
 Interval HeightMap::range() const {

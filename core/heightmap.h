@@ -19,6 +19,19 @@
 
 namespace oblong {
 
+// An image file's pixels as float, read with every check a displacement map gets: the
+// file must be a regular file; chunk lengths and the claimed size are checked against
+// the file before anything is allocated; at most `maxPixels` pixels; what the image
+// library prints while reading is captured and becomes part of the one error line (or
+// one warning line for a file that loaded). `channels` > 0 reads that many channels
+// (the first ones), 0 all of them. `what` names the image in messages.
+struct ImageRead {
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> px;   // interleaved, row 0 first
+  std::string colorSpace;  // OpenImageIO's "oiio:ColorSpace"
+};
+ImageRead readImageFile(const std::string& path, int channels, int64_t maxPixels, const std::string& what);
+
 class HeightMap {
  public:
   HeightMap() = default;

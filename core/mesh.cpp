@@ -188,9 +188,12 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
  public:
   bool Exists(const char* file) const override { return allowed(file) && DefaultIOSystem::Exists(file); }
   Assimp::IOStream* Open(const char* file, const char* mode) override {
-    return allowed(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
+    Assimp::IOStream* s = allowed(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
+    if (s && std::find(opened_.begin(), opened_.end(), file) == opened_.end()) opened_.emplace_back(file);
+    return s;
   }
   const std::string& refused() const { return refused_; }
+  const std::vector<std::string>& opened() const { return opened_; }
 
  private:
   bool allowed(const char* file) const {
@@ -200,6 +203,7 @@ class RegularFilesOnly : public Assimp::DefaultIOSystem {
     return false;
   }
   mutable std::string refused_;
+  std::vector<std::string> opened_;
 };
 
 // assimp recurses once per level of a file's nesting (checkMeshNesting bounds the levels
@@ -381,6 +385,7 @@ Mesh loadMeshHere(const std::string& path, const MeshLoadOptions& opts) {
   importer.SetIOHandler(io);  // the importer owns it
   const PlyCheck ply = checkPly(path, importer);
   checkMeshNesting(path, importer);
+  checkMeshCounts(path, importer);
   // ValidateDataStructure: indices out of range and the like become an error instead of
   // reaching the post-processing steps.
   constexpr unsigned kFlags = aiProcess_ValidateDataStructure | aiProcess_Triangulate |
@@ -412,6 +417,8 @@ Mesh loadMeshHere(const std::string& path, const MeshLoadOptions& opts) {
 
   Mesh m;
   m.name = path;
+  for (const std::string& f : io->opened())
+    if (!sameFile(f, path)) m.files.push_back(f);
   bool allUVs = true;
   const bool flippedV = importerFlipsV(importer);
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {

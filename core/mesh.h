@@ -31,6 +31,9 @@ struct Mesh {
   // of the warning line, after assimp's triangulation; not the file's face index, which
   // assimp's post-processing does not keep). Filled by finishMesh; empty otherwise.
   std::vector<uint32_t> inputTriangle;
+  // The other files the loader read for it (an OBJ's .mtl, a glTF's .bin): inputs as
+  // much as the mesh file, which no output may name.
+  std::vector<std::string> files;
 
   bool hasUVs() const { return !uvs.empty(); }
   // Triangle i in the mesh's frame (positions, not world coordinates).

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -396,6 +398,166 @@ void checkMeshNesting(const std::string& path, const Assimp::Importer& importer)
              (readAs(ext, {".x"}, start.substr(0, 4) == "xof ", importer) && got >= 12 && start.substr(8, 4) == "txt ")) {
     if (const size_t d = braceDepth(readAll(path)); d > size_t(kMaxMeshNesting)) tooDeep(path, "scopes ({ })", d);
   }
+}
+
+namespace {
+
+// Whole unsigned integers of `text` (not part of a word, a float or a signed number)
+// following `keyword` and spaces; an empty keyword takes every such integer. Yields
+// (value, line) pairs, values saturated at 2^63.
+template <typename F>
+void countsAfter(const std::string& text, std::string_view keyword, F&& each) {
+  const auto word = [](char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '.' || c == '-' || c == '+' || c == '*'; };
+  size_t line = 1;
+  for (size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\n') ++line;
+    size_t at = i;
+    if (!keyword.empty()) {
+      if (text.compare(i, keyword.size(), keyword) != 0 || (i > 0 && word(text[i - 1]))) continue;
+      at = i + keyword.size();
+      if (at >= text.size() || (text[at] != ' ' && text[at] != '\t')) continue;
+      while (at < text.size() && (text[at] == ' ' || text[at] == '\t')) ++at;
+    } else if (!std::isdigit((unsigned char)text[i]) || (i > 0 && word(text[i - 1]))) {
+      continue;
+    }
+    size_t end = at;
+    uint64_t v = 0;
+    while (end < text.size() && std::isdigit((unsigned char)text[end])) {
+      v = v > (uint64_t(1) << 59) ? uint64_t(1) << 63 : v * 10 + uint64_t(text[end] - '0');
+      ++end;
+    }
+    if (end == at || (end < text.size() && (word(text[end]) || text[end] == 'e' || text[end] == 'E'))) {
+      if (keyword.empty()) i = std::max(i, end);
+      continue;
+    }
+    each(v, line);
+    if (keyword.empty()) i = end - 1;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// assimp reads `nan`, `inf` and `1e999` in an OBJ as 0 (a texture coordinate of 0 made
+// a triangle of zero uv area, or traced another one wrongly) and drops a face whose index
+// is past the vertices without a word: both are errors naming the line.
+void checkObjNumbers(const std::string& path, const std::string& text) {
+  uint64_t count[3] = {};  // v, vt, vn defined so far
+  const char* what[3] = {"vertex position", "texture coordinate", "normal"};
+  struct Far {
+    uint64_t index = 0;
+    size_t line = 0;
+    std::string key;
+  } far[3];  // the largest positive index of each kind (it may name a later element)
+  // Split by hand: an OBJ may have millions of lines.
+  const auto next = [](std::string_view& rest) {
+    const size_t a = rest.find_first_not_of(" \t\r");
+    if (a == std::string_view::npos) return rest = {}, std::string_view{};
+    const size_t b = std::min(rest.find_first_of(" \t\r", a), rest.size());
+    const std::string_view t = rest.substr(a, b - a);
+    rest.remove_prefix(b);
+    return t;
+  };
+  size_t n = 0;
+  for (size_t at = 0; at < text.size();) {
+    const size_t eol = std::min(text.find('\n', at), text.size());
+    std::string_view rest(text.data() + at, eol - at);
+    at = eol + 1, ++n;
+    const std::string_view key = next(rest);
+    const int kind = key == "v" ? 0 : key == "vt" ? 1 : key == "vn" ? 2 : -1;
+    if (kind >= 0) {
+      ++count[kind];
+      for (std::string_view t; !(t = next(rest)).empty();) {
+        const std::string tok(t.substr(0, 64));
+        char* end = nullptr;
+        const double d = std::strtod(tok.c_str(), &end);
+        if (end == tok.c_str()) break;  // a word ends the numbers (a comment, say): assimp's to judge
+        if (!std::isfinite(d))
+          fail(path, "line {}: {}: non-finite {} '{}'", n, key, what[kind], tok.substr(0, 40));
+      }
+    } else if (key == "f" || key == "l" || key == "p") {
+      for (std::string_view t; !(t = next(rest)).empty();) {
+        size_t from = 0;
+        for (int k = 0; k < 3 && from <= t.size(); ++k) {
+          const size_t slash = std::min(t.find('/', from), t.size());
+          const std::string idx(t.substr(from, std::min<size_t>(slash - from, 24)));
+          from = slash + 1;
+          if (idx.empty()) continue;
+          char* end = nullptr;
+          const long long i = std::strtoll(idx.c_str(), &end, 10);
+          if (*end != '\0') break;
+          if (i == 0) fail(path, "line {}: {}: index 0 (OBJ indices start at 1)", n, key);
+          // A negative index counts back from the last element defined so far.
+          if (i < 0 && uint64_t(-(i + 1)) + 1 > count[k])
+            fail(path, "line {}: {}: {} index {} reaches before the first of the {} defined so far", n, key,
+                 what[k], idx, count[k]);
+          if (i > 0 && uint64_t(i) > far[k].index) far[k] = {uint64_t(i), n, std::string(key)};
+        }
+      }
+    }
+  }
+  for (int k = 0; k < 3; ++k)
+    if (far[k].index > count[k])
+      fail(path, "line {}: {}: {} index {} is past the file's {} {}s", far[k].line, far[k].key, what[k],
+           far[k].index, count[k], what[k]);
+}
+
+}  // namespace
+
+void checkMeshCounts(const std::string& path, const Assimp::Importer& importer) {
+  const std::string ext = lowerExtension(path);
+  std::string text;
+  {
+    std::ifstream in(path, std::ios::binary);
+    char head[16] = {};
+    in.read(head, sizeof head);
+    text.assign(head, size_t(std::max<std::streamsize>(0, in.gcount())));
+  }
+  const std::string_view start(text);
+  const bool off = readAs(ext, {".off"}, start.find("OFF") < 4, importer);
+  const bool ase = readAs(ext, {".ase", ".ask"}, start.substr(0, 1) == "*", importer);
+  const bool ac3d = readAs(ext, {".ac", ".acc", ".ac3d"}, start.substr(0, 4) == "AC3D", importer);
+  const bool x = readAs(ext, {".x"}, start.substr(0, 4) == "xof ", importer) && start.substr(8, 4) == "txt ";
+  const bool nff = readAs(ext, {".nff", ".enff"}, false, importer);
+  const bool obj = readAs(ext, {".obj"}, false, importer);
+  if (!(off || ase || ac3d || x || nff || obj)) return;
+  text = readAll(path);
+  const uint64_t size = text.size();
+  const auto bounded = [&](std::string_view what) {
+    return [&, what](uint64_t v, size_t line) {
+      if (v > size)
+        fail(path, "cannot load mesh ({}{}{}{} claims more elements than this {}-byte file can hold)",
+             line > 0 ? fmt::format("line {}: ", line) : "", what, what.empty() ? "" : " ", v, size);
+    };
+  };
+  if (off) {
+    // The header: OFF (or COFF, NOFF, ...), then the vertex, face and edge counts.
+    const size_t at = text.find("OFF");
+    std::istringstream in(text.substr(at == std::string::npos ? 0 : at + 3, 256));
+    uint64_t counts[2] = {};
+    std::string tok;
+    for (int k = 0; k < 2 && in >> tok;)
+      if (tok[0] == '#') std::getline(in, tok);
+      else if (std::all_of(tok.begin(), tok.end(), [](char c) { return std::isdigit((unsigned char)c); }))
+        counts[k++] = tok.size() > 18 ? uint64_t(1) << 63 : std::stoull(tok);
+      else break;
+    for (uint64_t c : counts) bounded("the OFF header's count")(c, 0);
+  }
+  if (ase)
+    for (const char* k : {"*MESH_NUMVERTEX", "*MESH_NUMFACES", "*MESH_NUMTVERTEX", "*MESH_NUMTVFACES",
+                          "*MESH_NUMCVERTEX", "*MESH_NUMCVFACES", "*MESH_NUMBONE", "*MATERIAL_COUNT", "*NUMSUBMTLS"})
+      countsAfter(text, k, bounded(k));
+  if (ac3d)
+    for (const char* k : {"numvert", "numsurf", "kids", "refs"}) countsAfter(text, k, bounded(k));
+  if (obj) checkObjNumbers(path, text);
+  if (x) countsAfter(text, "", bounded(""));  // counts are untagged; indices are below them
+  if (nff)
+    countsAfter(text, "tess", [&](uint64_t v, size_t line) {
+      if (v > uint64_t(kMaxNffTess))
+        fail(path, "cannot load mesh (line {}: tess {}: at most {} is supported, a sphere of 20·4^tess triangles)",
+             line, v, kMaxNffTess);
+    });
 }
 
 }  // namespace oblong

@@ -23,4 +23,11 @@ constexpr uint64_t kMaxMeshNodeCopies = uint64_t(1) << 22;
 // Does nothing for files of other formats, and leaves malformed files to assimp.
 void checkMeshNesting(const std::string& path, const Assimp::Importer& importer);
 
+// The element counts of the text formats whose readers allocate what the header claims
+// before reading it (OFF, ASE, AC3D, DirectX .x in text) may not exceed the file's size
+// in bytes: every element takes at least one byte. NFF's `tess` (a sphere of 20·4^tess
+// triangles) is at most kMaxNffTess. Does nothing for other formats.
+constexpr int kMaxNffTess = 8;
+void checkMeshCounts(const std::string& path, const Assimp::Importer& importer);
+
 }  // namespace oblong

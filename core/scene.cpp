@@ -129,7 +129,13 @@ class Reader {
     if (!v.is_number()) fail(file_, "{}: must be a number, got {}", where, shown(v));
     const double d = v.get<double>();
     if (!std::isfinite(d) || std::abs(d) > std::numeric_limits<float>::max())
-      fail(file_, "{}: must be a finite number, got {}", where, shown(v));
+      fail(file_, "{}: must be a finite number within float's range (|x| <= {:g}), got {}", where,
+           std::numeric_limits<float>::max(), shown(v));
+    // Rounding to float must not turn a nonzero value into 0 (or a subnormal): the
+    // checks after it would blame a value that was not given.
+    if (d != 0.0 && std::abs(d) < std::numeric_limits<float>::min())
+      fail(file_, "{}: {} is too small for a float: give 0 or a magnitude of at least {:g}", where, shown(v),
+           std::numeric_limits<float>::min());
     return float(d);
   }
   int toPositiveInt(const json& v, const std::string& where, int max) const {
@@ -580,6 +586,29 @@ Scene parseScene(const json& j, const std::string& path) {
   }
 }
 
+namespace {
+// What a file that is not JSON is, when its first bytes say so (an image or a binary
+// mesh given as the scene): nullptr otherwise.
+const char* knownBinaryKind(const std::string& path) {
+  char head[12] = {};
+  std::ifstream f(path, std::ios::binary);
+  f.read(head, sizeof head);
+  const std::string_view h(head, size_t(std::max<std::streamsize>(0, f.gcount())));
+  const auto starts = [&](std::string_view m) { return h.substr(0, m.size()) == m; };
+  if (starts("\x89PNG")) return "a PNG image";
+  if (starts("\xFF\xD8\xFF")) return "a JPEG image";
+  if (starts("\x76\x2f\x31\x01")) return "an OpenEXR image";
+  if (starts(std::string_view("II*\0", 4)) || starts(std::string_view("MM\0*", 4))) return "a TIFF image";
+  if (starts("#?RADIANCE") || starts("#?RGBE")) return "a Radiance HDR image";
+  if (starts("GIF8")) return "a GIF image";
+  if (starts("PF\n") || starts("Pf\n")) return "a PFM image";
+  if (starts("BM")) return "a BMP image";
+  if (starts("ply\n") || starts("ply\r")) return "a PLY mesh whose name does not end in .ply";
+  if (starts("glTF")) return "a GLB mesh whose name does not end in .glb";
+  return nullptr;
+}
+}  // namespace
+
 Scene loadScene(const std::string& path) {
   try {
     checkInputFile(path);
@@ -593,6 +622,10 @@ Scene loadScene(const std::string& path) {
           in, [&](int, json::parse_event_t event, json& parsed) { return duplicates(event, parsed); }, true,
           /*ignore_comments=*/true);
     } catch (const json::exception& e) {  // parse_error, or out_of_range for 1e400
+      if (const char* kind = knownBinaryKind(path))
+        fail(path, "is {}, not a scene (a JSON scene file, or a mesh file such as .obj, .ply or .gltf; a "
+                   "displacement map goes in meshes[].displacement.map, or after --displacement with a mesh file)",
+             kind);
       fail(path, "malformed JSON: {}", e.what());
     }
     return parseSceneImpl(j, path);

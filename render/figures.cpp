@@ -1,6 +1,7 @@
 #include "render/figures.h"
 
 #include "core/error.h"
+#include "core/heightmap.h"
 #include "render/image.h"
 
 #include <OpenImageIO/imagebuf.h>
@@ -53,8 +54,9 @@ std::vector<Tick> ticks(const ColourScale& s) {
     const float lo = s.max * std::pow(10.0f, -float(s.decades));
     // Whole decades inside the range, so the numbers read as powers of ten.
     t.push_back({lo, label(lo, s.kind)});
-    for (float p = std::pow(10.0f, std::ceil(std::log10(lo) + 1e-4f)); p < s.max * 0.999f; p *= 10.0f)
-      t.push_back({p, label(p, s.kind)});
+    // At most one tick a decade (a bounded loop even if lo were 0 or a subnormal).
+    float p = std::pow(10.0f, std::ceil(std::log10(lo) + 1e-4f));
+    for (int d = 0; d < s.decades && p > 0 && p < s.max * 0.999f; ++d, p *= 10.0f) t.push_back({p, label(p, s.kind)});
   }
   t.push_back({s.max, label(s.max, s.kind)});
   return t;
@@ -133,7 +135,7 @@ FalseColourResult writeFalseColour(const std::vector<float>& values, int W, int 
       if (c[0] > 0) img.at(x, H + y) = linear(vec3(c[0], c[1], c[2]));
     }
   writeImage(img, path);
-  return {labelled};
+  return {labelled, W, H + barH};
 }
 
 HeatMapScale heatMapScale(const AOVs& aov, float fixedMax) {
@@ -163,32 +165,18 @@ struct RGB {
 float srgbToLinear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
 RGB readRGB(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) {
-    std::string e = OIIO::geterror();
-    for (char& c : e)
-      if (c == '\n') c = ' ';
-    fail(path, "cannot read the image ({})", e.empty() ? "unknown format" : e);
-  }
-  const OIIO::ImageSpec spec = in->spec();
-  const int C = spec.nchannels;
-  if (spec.width <= 0 || spec.height <= 0 || C <= 0) fail(path, "the image has no pixels");
-  // A header may claim any size: refused before the allocation (render's limit, 2^26 pixels).
-  if (int64_t(spec.width) * spec.height > (int64_t(1) << 26) || C > 64)
-    fail(path, "is {}x{} with {} channels: more than 2^26 pixels or 64 channels", spec.width, spec.height, C);
-  std::vector<float> all(size_t(spec.width) * spec.height * C);
-  if (!in->read_image(0, 0, 0, C, OIIO::TypeDesc::FLOAT, all.data()))
-    fail(path, "cannot read the image ({})", in->geterror());
-  in->close();
-  const bool srgb = OIIO::Strutil::iequals(spec.get_string_attribute("oiio:ColorSpace"), "sRGB");
+  // The height maps' reader and checks (a regular file, a header's claims against the
+  // file's size, the library's messages on one line); at most render's 2^26 pixels.
+  const ImageRead in = readImageFile(path, 0, int64_t(1) << 26, "image");
+  const int C = in.channels, W = in.width;
+  const bool srgb = OIIO::Strutil::iequals(in.colorSpace, "sRGB");
   RGB img;
-  img.width = spec.width, img.height = spec.height;
-  img.px.resize(size_t(spec.width) * spec.height * 3);
-  for (size_t i = 0; i < size_t(spec.width) * spec.height; ++i)
+  img.width = in.width, img.height = in.height;
+  img.px.resize(size_t(in.width) * in.height * 3);
+  for (size_t i = 0; i < size_t(in.width) * in.height; ++i)
     for (int c = 0; c < 3; ++c) {
-      float v = all[i * C + (C >= 3 ? c : 0)];
-      if (!std::isfinite(v))
-        fail(path, "pixel ({}, {}) is not finite ({})", i % spec.width, i / spec.width, v);
+      const float v = in.px[i * C + (C >= 3 ? c : 0)];
+      if (!std::isfinite(v)) fail(path, "pixel ({}, {}) is not finite ({})", i % W, i / W, v);
       img.px[i * 3 + c] = srgb ? srgbToLinear(v) : v;
     }
   return img;

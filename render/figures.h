@@ -26,6 +26,7 @@ struct ColourScale {
 // What a false-colour map was written with.
 struct FalseColourResult {
   bool labelled = true;  // false: no font was found, the bar has no numbers
+  int width = 0, height = 0;  // the file's size: the image's, and the bar's rows below it
 };
 
 // `values` (W x H, row-major) in false colour with the colour bar, its numbers and the

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "render/output.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
@@ -11,6 +12,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+
+#include <sys/statvfs.h>
 
 namespace oblong {
 
@@ -35,6 +38,22 @@ std::string encodePFM(const Image& img) {
   return out;
 }
 
+// A library message on one line (docs/bad_input.md).
+std::string oneLine(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+// Why a written file may not read back: say so when its filesystem is full.
+std::string spaceLeftNote(const std::string& file) {
+  struct statvfs fs {};
+  const std::string folder = std::filesystem::path(file).parent_path().string();
+  if (::statvfs(folder.empty() ? "." : folder.c_str(), &fs) == 0 && fs.f_bavail == 0)
+    return ": No space left on device";
+  return "";
+}
+
 std::string lowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -53,26 +72,47 @@ void checkImageOutput(const std::string& path, const std::string& what) {
   }
 }
 
+// OpenImageIO's file writers go through stdio and ignore a failed fwrite: on a full
+// disk a PNG came out empty or cut short with no error. So the image is encoded into
+// memory where the format's writer accepts an IOProxy (PNG, EXR, TIFF, HDR, JPEG, BMP,
+// TGA, PPM, ...) and its bytes written with every write checked; a format without one is
+// written to the file directly and then read back whole, which a cut file fails.
+void writeImagePixels(const ImagePixels& px, const std::string& path, const std::string& what) {
+  const OIIO::TypeDesc type = px.float32 ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8;
+  OIIO::ImageSpec spec(px.width, px.height, px.channels, type);
+  if (!px.names.empty()) spec.channelnames = px.names;
+  if (px.zChannel >= 0) spec.z_channel = px.zChannel;
+  writeOutput(path, [&](const std::string& tmp) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) fail(path, "cannot write {} ({})", what, oneLine(OIIO::geterror()));
+    const bool inMemory = out->supports("ioproxy");
+    std::vector<unsigned char> bytes;
+    OIIO::Filesystem::IOVecOutput vec(bytes);
+    if (inMemory && !out->set_ioproxy(&vec)) fail(path, "cannot write {} ({})", what, oneLine(out->geterror()));
+    if (!out->open(tmp, spec) || !out->write_image(type, px.data) || !out->close())
+      fail(path, "cannot write {} ({})", what, oneLine(out->geterror()));
+    if (inMemory) return writeFileBytes(tmp, path, bytes.data(), bytes.size());
+    auto in = OIIO::ImageInput::open(tmp);
+    std::vector<unsigned char> back(size_t(px.width) * px.height * px.channels * type.size());
+    if (!in || in->spec().width != px.width || in->spec().height != px.height ||
+        !in->read_image(0, 0, 0, px.channels, type, back.data()))
+      fail(path, "write failed (the written file does not read back{})", spaceLeftNote(tmp));
+  });
+}
+
 void writeImage(const Image& img, const std::string& path) {
   const std::string ext = lowerExtension(path);
   if (ext == ".pfm") return writeTextOutput(path, encodePFM(img));
   const bool linear = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
-  writeOutput(path, [&](const std::string& tmp) {
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) fail(path, "cannot write image ({})", OIIO::geterror());
-    OIIO::ImageSpec spec(img.width, img.height, 3, linear ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    if (!out->open(tmp, spec)) fail(path, "cannot write image ({})", out->geterror());
-    bool ok;
-    if (linear) {
-      ok = out->write_image(OIIO::TypeDesc::FLOAT, img.pixels.data());
-    } else {
-      std::vector<unsigned char> px(img.pixels.size() * 3);
-      for (size_t i = 0; i < img.pixels.size(); ++i)
-        for (int c = 0; c < 3; ++c) px[3 * i + c] = (unsigned char)std::lround(255.0f * toSRGB(img.pixels[i][c]));
-      ok = out->write_image(OIIO::TypeDesc::UINT8, px.data());
-    }
-    if (!ok || !out->close()) fail(path, "cannot write image ({})", out->geterror());
-  });
+  ImagePixels px{img.width, img.height, 3, linear, img.pixels.data()};
+  std::vector<unsigned char> bytes;
+  if (!linear) {
+    bytes.resize(img.pixels.size() * 3);
+    for (size_t i = 0; i < img.pixels.size(); ++i)
+      for (int c = 0; c < 3; ++c) bytes[3 * i + c] = (unsigned char)std::lround(255.0f * toSRGB(img.pixels[i][c]));
+    px.data = bytes.data();
+  }
+  writeImagePixels(px, path, "image");
 }
 
 }  // namespace oblong

@@ -24,4 +24,17 @@ void writeImage(const Image& img, const std::string& path);
 // Before any work: the path can be written (checkOutputPath) and names a format.
 void checkImageOutput(const std::string& path, const std::string& what = "image");
 
+// Pixels of `channels` interleaved values (float32, or uint8 when `float32` is false),
+// written through OpenImageIO in the format `path` names, so that any failed write is
+// an error naming `path` and no truncated file is left (render/output.h). `names`
+// labels the channels (empty: OpenImageIO's defaults); `zChannel` marks depth (-1: none).
+struct ImagePixels {
+  int width = 0, height = 0, channels = 3;
+  bool float32 = true;
+  const void* data = nullptr;
+  std::vector<std::string> names;
+  int zChannel = -1;
+};
+void writeImagePixels(const ImagePixels& px, const std::string& path, const std::string& what);
+
 }  // namespace oblong

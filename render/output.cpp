@@ -22,10 +22,14 @@ namespace {
 // The file a name finally refers to: symbolic links followed (also dangling ones, whose
 // target the write creates), relative targets taken against the link's folder. A loop
 // of links is an error naming the output.
+// /proc's links (/dev/stdout is /proc/self/fd/1) are not followed: their targets
+// ("pipe:[123]") are no names, and opening the link itself reaches the open file.
+bool inProc(const fs::path& p) { return p.string().rfind("/proc/", 0) == 0; }
+
 fs::path resolve(const std::string& path, bool throws = true) {
   fs::path p(path);
   std::error_code ec;
-  for (int hops = 0; fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+  for (int hops = 0; !inProc(p) && fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
     if (hops == 40 && throws) fail(path, "cannot write: a loop of symbolic links");
     const fs::path t = fs::read_symlink(p, ec);
     if ((ec || hops == 40) && !throws) return p;
@@ -44,10 +48,12 @@ fs::path comparable(const std::string& path, bool throws = true) {
   return ec ? abs.lexically_normal() : c;
 }
 
+// Written through rather than replaced: a device, a FIFO, or a file reached through /proc
+// (standard output redirected to a file: replacing the name would lose what is written).
 bool isDevice(const fs::path& p) {
   std::error_code ec;
   const fs::file_status st = fs::status(p, ec);
-  return fs::exists(st) && !fs::is_regular_file(st) && !fs::is_directory(st);
+  return fs::exists(st) && !fs::is_directory(st) && (!fs::is_regular_file(st) || inProc(p));
 }
 
 fs::path folderOf(const fs::path& p) { return p.has_parent_path() ? p.parent_path() : fs::path("."); }
@@ -99,7 +105,7 @@ void checkOutputPath(const std::string& path, const std::string& what) {
   if (ec && ec != std::errc::no_such_file_or_directory)
     fail(path, "cannot write {} ({})", what, ec.message());
   if (fs::is_directory(st)) fail(path, "cannot write {}: is a directory", what);
-  if (fs::exists(st) && !fs::is_regular_file(st)) {  // a device or FIFO: written through
+  if (isDevice(target)) {  // written through
     if (::access(target.c_str(), W_OK) != 0) fail(path, "cannot write {} ({})", what, errnoText());
     return;
   }
@@ -113,6 +119,8 @@ void checkOutputPath(const std::string& path, const std::string& what) {
   std::error_code rm;
   fs::remove(makeTemp(path, folder, target.filename().string(), target.extension().string()), rm);
 }
+
+bool writtenThrough(const std::string& path) { return isDevice(resolve(path, false)); }
 
 void checkDistinctOutputs(const std::vector<std::pair<std::string, std::string>>& outputs) {
   for (size_t i = 0; i < outputs.size(); ++i)
@@ -142,8 +150,7 @@ void writeOutput(const std::string& path, const std::function<void(const std::st
   const fs::path target = resolve(path);
   const std::string ext = target.extension().string(), stem = target.filename().string();
   std::error_code ec;
-  const fs::file_status st = fs::status(target, ec);
-  const bool through = fs::exists(st) && !fs::is_regular_file(st);
+  const bool through = isDevice(target);
   std::error_code tec;
   fs::path tmpFolder = through ? fs::temp_directory_path(tec) : folderOf(target);
   if (tec) tmpFolder = "/tmp";
@@ -152,7 +159,8 @@ void writeOutput(const std::string& path, const std::function<void(const std::st
     write(tmp.string());
     if (through) {
       const std::string bytes = slurp(tmp);
-      const int fd = ::open(target.c_str(), O_WRONLY | O_CLOEXEC);
+      // O_APPEND: standard output redirected with >> keeps what it held (> emptied it).
+      const int fd = ::open(target.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
       if (fd < 0) fail(path, "cannot open for writing ({})", errnoText());
       writeAllAndClose(fd, path, bytes.data(), bytes.size());
       fs::remove(tmp, ec);
@@ -165,12 +173,14 @@ void writeOutput(const std::string& path, const std::function<void(const std::st
   }
 }
 
+void writeFileBytes(const std::string& file, const std::string& path, const void* data, size_t n) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  if (fd < 0) fail(path, "cannot open for writing ({})", errnoText());
+  writeAllAndClose(fd, path, static_cast<const char*>(data), n);
+}
+
 void writeTextOutput(const std::string& path, const std::string& text) {
-  writeOutput(path, [&](const std::string& tmp) {
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
-    if (fd < 0) fail(path, "cannot open for writing ({})", errnoText());
-    writeAllAndClose(fd, path, text.data(), text.size());
-  });
+  writeOutput(path, [&](const std::string& tmp) { writeFileBytes(tmp, path, text.data(), text.size()); });
 }
 
 }  // namespace oblong

@@ -8,6 +8,7 @@
 // it, every write and the close checked. Symbolic links are followed.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <string>
 #include <vector>
@@ -18,6 +19,10 @@ namespace oblong {
 // directory, a missing or unwritable folder, an unwritable file. `what` names the
 // output in the message ("image", "statistics", ...).
 void checkOutputPath(const std::string& path, const std::string& what);
+
+// Whether `path` is written through (a device, a FIFO, standard output through
+// /dev/stdout) rather than replaced by a finished temporary file.
+bool writtenThrough(const std::string& path);
 
 // Distinct outputs of one command must not name the same file (both would be written).
 // `outputs` holds (flag, path) pairs; empty paths are ignored. Compared as files:
@@ -34,6 +39,10 @@ void checkNotInputs(const std::vector<std::pair<std::string, std::string>>& outp
 // `write` throws oblong::Error on failure; anything left is removed. Then the file is
 // renamed (or copied) into place, which throws oblong::Error naming `path` on failure.
 void writeOutput(const std::string& path, const std::function<void(const std::string& tmp)>& write);
+
+// Writes `n` bytes into the existing file `file` (truncating it), every write and the
+// close checked; errors name `path`, the output the file stands for.
+void writeFileBytes(const std::string& file, const std::string& path, const void* data, size_t n);
 
 // Text content in one go (JSON, CSV): every write and the close are checked.
 void writeTextOutput(const std::string& path, const std::string& text);

@@ -48,13 +48,18 @@ Scene sceneFrom(const std::string& path, const AssetFlags& asset) {
 
 ivec2 parseSize(const std::string& s) {
   std::smatch m;
-  static const std::regex re(R"((\d{1,5})x(\d{1,5}))");
+  static const std::regex re(R"((\d+)x(\d+))");
   if (!std::regex_match(s, m, re)) fail("--size", "expected WxH with positive integers, got '{}'", s);
-  const ivec2 v(std::stoi(m[1]), std::stoi(m[2]));
-  if (v.x <= 0 || v.y <= 0) fail("--size", "expected positive sizes, got '{}'", s);
-  if (int64_t(v.x) * v.y > kMaxImagePixels)
-    fail("--size", "{}x{} pixels is more than the supported 2^26 (8192x8192), as in a scene's image block", v.x, v.y);
-  return v;
+  // Each side saturated past 2^31 (any such side is too large anyway).
+  const auto side = [](const std::string& d) {
+    return d.size() > 10 ? int64_t(1) << 31 : std::min<int64_t>(std::stoll(d), int64_t(1) << 31);
+  };
+  const int64_t w = side(m[1]), h = side(m[2]);
+  if (w <= 0 || h <= 0) fail("--size", "expected positive sizes, got '{}'", s);
+  if (w * h > kMaxImagePixels)
+    fail("--size", "{} pixels is more than the supported 2^26 (8192x8192), as in a scene's image block",
+         excerpt(s, 40));
+  return ivec2(int(w), int(h));
 }
 
 uint64_t parseSeed(const std::string& s) {

@@ -51,7 +51,7 @@ float parseFloat(const std::string& f, const std::string& where, const char* fie
   char* end = nullptr;
   errno = 0;
   const float v = std::strtof(f.c_str(), &end);
-  if (end != f.c_str() + f.size()) fail(where, "field '{}' is not a number: '{}'", field, f);
+  if (end != f.c_str() + f.size()) fail(where, "field '{}' is not a number: '{}'", field, excerpt(f));
   if (std::isnan(v)) fail(where, "field '{}' is NaN", field);
   return v;
 }
@@ -108,7 +108,7 @@ std::vector<Ray> readRays(const std::string& path) {
   std::string line;
   if (!std::getline(f, line)) fail(path, "empty file; expected the header '{}'", kRayHeader);
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  if (line != kRayHeader) fail(path, "line 1: expected the header '{}', got '{}'", kRayHeader, line);
+  if (line != kRayHeader) fail(path, "line 1: expected the header '{}', got '{}'", kRayHeader, excerpt(line));
   static const char* names[8] = {"ox", "oy", "oz", "dx", "dy", "dz", "tmin", "tmax"};
   for (size_t lineNo = 2; std::getline(f, line); ++lineNo) {
     if (line.empty() || line == "\r") continue;
@@ -209,7 +209,7 @@ std::vector<Hit> readHits(const std::string& path) {
     int v = -1;
     const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), v);
     if (ec != std::errc() || end != field.data() + field.size() || v < 0)
-      fail(where, "field '{}' is not an index >= 0: '{}'", name, field);
+      fail(where, "field '{}' is not an index >= 0: '{}'", name, excerpt(field));
     return v;
   };
   for (size_t lineNo = 2; std::getline(f, line); ++lineNo) {

@@ -3,10 +3,8 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "render/camera.h"
-#include "render/output.h"
 #include "render/sampling.h"
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/core.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
@@ -342,16 +340,10 @@ void writeAOVs(const AOVs& aov, const std::string& path) {
     o[4] = aov.normal[i].x, o[5] = aov.normal[i].y, o[6] = aov.normal[i].z;
     o[7] = aov.steps[i], o[8] = aov.rangeQueries[i], o[9] = aov.inversions[i], o[10] = aov.cellsMarched[i];
   }
-  writeOutput(path, [&](const std::string& tmp) {
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out) fail(path, "cannot write AOVs ({})", OIIO::geterror());
-    OIIO::ImageSpec spec(W, H, C, OIIO::TypeDesc::FLOAT);
-    spec.channelnames.assign(std::begin(names), std::end(names));
-    spec.z_channel = 3;
-    if (!out->open(tmp, spec)) fail(path, "cannot write AOVs ({})", out->geterror());
-    if (!out->write_image(OIIO::TypeDesc::FLOAT, px.data()) || !out->close())
-      fail(path, "cannot write AOVs ({})", out->geterror());
-  });
+  ImagePixels img{W, H, C, true, px.data()};
+  img.names.assign(std::begin(names), std::end(names));
+  img.zChannel = 3;
+  writeImagePixels(img, path, "AOVs");
 }
 
 }  // namespace oblong

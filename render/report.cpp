@@ -116,8 +116,13 @@ void printRenderSummary(const RenderReport& r) {
     if (h.fixed)
       fixed = fmt::format(" (--heatmap-max; the image's largest {}, {} pixel{} above the scale)", steps(h.imageMax),
                           h.pixelsAbove, h.pixelsAbove == 1 ? "" : "s");
-    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {}{}\n", r.heatmap, steps(h.max),
-               fixed);
+    // The bar is drawn below the image: the file is taller than the render (overlays crop it).
+    const std::string bar = r.heatFile.height > r.opts.size.y
+                                ? fmt::format(" below the {}x{} image (the file is {}x{})", r.opts.size.x, r.opts.size.y,
+                                              r.heatFile.width, r.heatFile.height)
+                                : std::string();
+    fmt::print("  heat map : {}, steps per camera ray, log scale, colour bar 0 .. {}{}{}\n", r.heatmap,
+               steps(h.max), fixed, bar);
   }
 }
 

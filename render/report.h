@@ -45,6 +45,7 @@ struct RenderReport {
   std::string out, heatmap;
   bool defaultOut = false;  // -o not given
   HeatMapScale heat;        // the heat map's colour scale (with a heat map)
+  FalseColourResult heatFile;  // what the heat map's file holds
 };
 // The configuration built, its memory, the summary line, the partial and heat-map lines.
 void printRenderSummary(const RenderReport& r);

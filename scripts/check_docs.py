@@ -223,6 +223,14 @@ def main():
     results, checked = experiment_readmes(root, files)
     problems += results
 
+    # One version number: CMake's project(VERSION), which `oblong --version` prints, and
+    # the citation's.
+    cmake_v = re.search(r"project\(oblong VERSION ([0-9.]+)", open(os.path.join(root, "CMakeLists.txt")).read())
+    cff_v = re.search(r"^version: *([0-9.]+)", open(os.path.join(root, "CITATION.cff")).read(), re.M)
+    if not cmake_v or not cff_v or cmake_v.group(1) != cff_v.group(1):
+        bad("CITATION.cff", f"version {cff_v and cff_v.group(1)} is not CMakeLists.txt's project version "
+            f"{cmake_v and cmake_v.group(1)}")
+
     for p in problems:
         print(p)
     if problems:

@@ -192,7 +192,8 @@ TEST_CASE("bad input: one clear error line from the loader and from the command 
       // Scene files.
       {"empty scene file", "", {"malformed JSON"}},
       {"truncated JSON", R"({"meshes": [{"file": "quad.obj"})", {"malformed JSON", "line 1"}},
-      {"binary garbage", std::string("\x89PNG\r\n\x1a\n\0\0\0", 12), {"malformed JSON"}},
+      {"binary garbage", std::string("\x03\xfe\x89PNG\r\n\x1a\n\0\0", 12), {"malformed JSON"}},
+      {"an image given as the scene", std::string("\x89PNG\r\n\x1a\n\0\0\0", 12), {"is a PNG image, not a scene"}},
       {"NaN is not JSON", R"({"meshes": [{"file": "quad.obj"}], "camera": {"fov": NaN}})", {"malformed JSON"}},
       {"top level is an array", "[]", {"must be an object"}},
       {"nesting too deep", deep, {"nested deeper than 64 levels"}},
@@ -845,4 +846,103 @@ TEST_CASE("bad input: an image that does not fit in memory is refused before any
   ::unsetenv("OBLONG_MEMORY_LIMIT");
   checkOneLineError(r, args, {"--size: rendering at this size needs", "smaller --size"});
   CHECK(!fs::exists(png));
+}
+
+TEST_CASE("bad input: a write cut short (a full device, a file size limit) fails every image writer with one line",
+          "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_cut_write");
+  // OpenImageIO's stdio writers ignored a failed write: exit 0 and an empty or cut image.
+  // `ulimit -f` cuts every write past 2 KiB (EFBIG; oblong ignores SIGXFSZ).
+  for (const char* ext : {"png", "exr", "hdr", "tga", "bmp", "ppm", "jpg", "tif", "pfm"}) {
+    const fs::path out = dir / fmt::format("o.{}", ext);
+    write(out, "keep");
+    const std::string args = fmt::format("render --size 96x72 --threads 1 -q -o {}", out.string());
+    const std::string cmd = fmt::format("bash -c 'ulimit -f 2; exec timeout 60 {} {}' >{} 2>{}", OBLONG_BINARY, args,
+                                        (dir / "out.txt").string(), (dir / "err.txt").string());
+    const int raw = std::system(cmd.c_str());
+    const Run r{WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(dir / "out.txt"), slurp(dir / "err.txt")};
+    checkOneLineError(r, args, {out.string() + ": write failed"});
+    CHECK(slurp(out) == "keep");
+    for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().filename().string().find(".oblong-") == std::string::npos);
+  }
+}
+
+TEST_CASE("bad input: files a mesh pulls in are inputs; lying counts, deep glTF, non-finite OBJ numbers",
+          "[bad_input][cli][assets]") {
+  const fs::path dir = test::scratchDir("bad_input_mesh_files");
+  test::writeGray((dir / "h.png").string(), 4, 4, std::vector<float>(16, 0.5f), OIIO::TypeDesc::UINT8);
+  const std::string quad = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n";
+  write(dir / "quad.obj", "mtllib quad.mtl\n" + quad + "usemtl m\nf 1/1 2/2 3/3 4/4\n");
+  write(dir / "quad.mtl", "newmtl m\ndisp h.png\n");
+  const std::string obj = (dir / "quad.obj").string(), mtl = (dir / "quad.mtl").string();
+  // An output naming the OBJ's material file: refused, the file untouched.
+  const std::string args = "render " + obj + " --size 8x8 -q --stats " + mtl + " -o " + (dir / "q.png").string();
+  checkOneLineError(runCli(args), args, {"names an input of this command", "quad.mtl"});
+  CHECK(slurp(dir / "quad.mtl") == "newmtl m\ndisp h.png\n");
+  const std::string traceArgs = "trace " + obj + " --rays " + (dir / "none.csv").string() + " -o " + mtl;
+  write(dir / "none.csv", "ox,oy,oz,dx,dy,dz,tmin,tmax\n0,0,1,0,0,-1,0,inf\n");
+  checkOneLineError(runCli(traceArgs), traceArgs, {"names an input", "quad.mtl"});
+  CHECK(slurp(dir / "quad.mtl") == "newmtl m\ndisp h.png\n");
+
+  // Headers that claim more than the file holds, and generators past their bound.
+  write(dir / "a.off", "OFF\n400000000 1 0\n0 0 0\n");
+  write(dir / "a.nff", "tess 20000\ns 0 0 0 1\n");
+  write(dir / "a.ase", "*3DSMAX_ASCIIEXPORT 200\n*GEOMOBJECT {\n*MESH {\n*MESH_NUMVERTEX 400000000\n*MESH_NUMFACES 1\n}\n}\n");
+  write(dir / "a.ac", "AC3Db\nOBJECT world\nkids 1\nOBJECT poly\nnumvert 400000000\n0 0 0\nkids 0\n");
+  write(dir / "a.x", "xof 0302txt 0032\nMesh {\n 400000000;\n 0.0;0.0;0.0;;\n 1;\n 3;0,0,0;;\n}\n");
+  // OBJ numbers assimp reads as 0, and an index past the vertices.
+  write(dir / "nan.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt nan 1\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+  write(dir / "inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1 1e999\nf 1 2 3\n");
+  write(dir / "index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+  // glTF: a material nested 100 000 deep (segfault in the error message before).
+  const int n = 100000;
+  write(dir / "deep.gltf", R"({"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{},"material":)" +
+                               std::string(n, '[') + std::string(n, ']') + "}]}]}");
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"a.off", {"a.off: cannot load mesh", "400000000 claims more elements than this"}},
+      {"a.nff", {"a.nff: cannot load mesh", "tess 20000: at most 8"}},
+      {"a.ase", {"a.ase: cannot load mesh", "*MESH_NUMVERTEX 400000000"}},
+      {"a.ac", {"a.ac: cannot load mesh", "numvert 400000000"}},
+      {"a.x", {"a.x: cannot load mesh", "400000000 claims more elements"}},
+      {"nan.obj", {"nan.obj: line 4: vt: non-finite texture coordinate 'nan'"}},
+      {"inf.obj", {"inf.obj: line 3: v: non-finite vertex position '1e999'"}},
+      {"index.obj", {"index.obj: line 4: f: vertex position index 9 is past the file's 3 vertex positions"}},
+      {"deep.gltf", {"deep.gltf: malformed glTF: nested deeper than 64 levels"}},
+  };
+  for (const auto& [file, expect] : cases) {
+    const std::string args = "info " + (dir / file).string();
+    checkOneLineError(runCli(args), args, expect);
+  }
+  // A material defined twice is named in a warning (the last definition is used).
+  write(dir / "twice.obj", "mtllib twice.mtl\n" + quad + "usemtl m\nf 1/1 2/2 3/3 4/4\n");
+  write(dir / "twice.mtl", "newmtl m\nKd 1 0 0\nnewmtl m\ndisp h.png\n");
+  const Run twice = runCli("info " + (dir / "twice.obj").string());
+  CHECK(twice.status == 0);
+  CHECK_THAT(twice.err, Contains("twice.mtl: line 3: newmtl m: defined again (first at line 1)"));
+}
+
+TEST_CASE("bad input: compare's limits, --size beyond 2^26, the version, standard output as an output",
+          "[bad_input][cli]") {
+  const fs::path dir = test::scratchDir("bad_input_compare_limits");
+  const std::string a = (dir / "a.exr").string();
+  REQUIRE(runCli("render --size 8x6 -q -o " + a).status == 0);
+  // The colour bar's ticks looped forever on a --max whose scale underflows.
+  for (const char* m : {"1e-45", "1e-43", "0x1p-149"}) {
+    const std::string args = fmt::format("compare {} {} -o {} --max {}", a, a, (dir / "e.png").string(), m);
+    checkOneLineError(runCli(args), args, {"--max: must be an error between 1e-30"});
+  }
+  // Inputs must be regular files (a FIFO blocked, /dev/zero never ended).
+  const std::string fifo = (dir / "fifo.exr").string();
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  for (const std::string& in : {fifo, std::string("/dev/zero")})
+    checkOneLineError(runCli("compare " + in + " " + a), "compare " + in, {in + ": not a regular file"});
+  checkOneLineError(runCli("render --size 1x67108865 -q"), "--size 1x67108865",
+                    {"--size: 1x67108865 pixels is more than the supported 2^26"});
+  // Written through to standard output: the bytes of a file export, the summary on stderr.
+  const std::string ply = (dir / "e.ply").string();
+  REQUIRE(runCli("export -o " + ply).status == 0);
+  const Run through = runCli("export -o /dev/stdout");
+  CHECK(through.status == 0);
+  CHECK(through.out == slurp(ply));
+  CHECK_THAT(through.err, Contains("oblong export:"));
 }

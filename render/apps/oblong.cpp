@@ -50,6 +50,9 @@
 #include <filesystem>
 #include <cerrno>
 #include <csignal>
+
+#include <sys/stat.h>
+#include <unistd.h>
 #include <cstring>
 #include <system_error>
 #include <optional>
@@ -58,18 +61,34 @@ using namespace oblong;
 
 namespace {
 
-// The files a loaded scene was read from (scene, meshes, maps), as (what, path) pairs
+// The files a loaded scene was read from (scene, meshes and the files they pull in such
+// as an OBJ's .mtl or a glTF's .bin, maps), as (what, path) pairs
 // for checkNotInputs; the procedural ones ("<...>") have no file.
 std::vector<std::pair<std::string, std::string>> sceneInputs(const std::string& scenePath, const Scene& scene) {
   std::vector<std::pair<std::string, std::string>> in;
   if (!scenePath.empty()) in.emplace_back("scene", scenePath);
   for (const SceneMesh& sm : scene.meshes) {
     if (!sm.mesh.name.empty() && sm.mesh.name[0] != '<') in.emplace_back("mesh", sm.mesh.name);
+    for (const std::string& f : sm.mesh.files) in.emplace_back("file of mesh " + sm.mesh.name, f);
     if (!sm.displacement) continue;
     for (const HeightMap* m : {sm.displacement->map.get(), sm.displacement->level0.get()})
       if (m && !m->name().empty() && m->name()[0] != '<') in.emplace_back("displacement map", m->name());
   }
   return in;
+}
+
+// An output named as standard output (-o /dev/stdout) gets the real standard output to
+// itself and the summaries go to stderr: printed to stdout they would mix into the bytes
+// written (or, with stdout redirected to a file, overwrite its start).
+void claimStandardOutput(std::string& path) {
+  if (path.rfind("/dev/", 0) != 0 && path.rfind("/proc/", 0) != 0) return;
+  struct stat a {}, b {};
+  if (::stat(path.c_str(), &a) != 0 || ::fstat(1, &b) != 0 || a.st_dev != b.st_dev || a.st_ino != b.st_ino) return;
+  const int fd = ::dup(1);
+  if (fd < 0) return;
+  std::fflush(stdout);
+  ::dup2(2, 1);
+  path = fmt::format("/proc/self/fd/{}", fd);
 }
 
 // --device of render and trace: "cpu" (Embree) or "vulkan" (render/vulkan/commands.h).
@@ -217,7 +236,8 @@ int runRender(const std::string& scenePath, const RenderFlags& rf, const RenderO
   progress.clear();
   if (!f.heatmap.empty()) warnEmptyHeatMap(scene, accelOpts, res, f.heatmap);
   if (!f.heatmap.empty()) warnUnlabelled(heatWritten, "--heatmap", f.heatmap);
-  const RenderReport report{scene, accelOpts, *backend, opts, res, f.out, f.heatmap, f.defaultOut, heat};
+  const RenderReport report{scene, accelOpts, *backend, opts, res, f.out, f.heatmap, f.defaultOut, heat,
+                            heatWritten};
   if (!f.quiet) printRenderSummary(report);
   // The summary's `partial` line, as a warning, when there is no summary.
   if (f.quiet && res.partial)
@@ -284,9 +304,7 @@ int runExport(const std::string& scenePath, const std::string& out, const std::s
   std::string ext = std::filesystem::path(out).extension().string();
   for (char& c : ext) c = char(std::tolower((unsigned char)c));
   // A device (/dev/stdout) takes the bytes whatever its name.
-  std::error_code ec;
-  const auto st = std::filesystem::status(out, ec);
-  if (ext != ".ply" && (!std::filesystem::exists(st) || std::filesystem::is_regular_file(st)))
+  if (ext != ".ply" && !writtenThrough(out))
     fail(out, "the export is a binary PLY file: use a .ply name");
   checkNotInputs({{"-o", out}}, {{"scene", scenePath}});
   const auto start = std::chrono::steady_clock::now();
@@ -325,7 +343,9 @@ int runExport(const std::string& scenePath, const std::string& out, const std::s
 // squared error as grey (EXR, TIFF, HDR, PFM: the values themselves).
 int runCompare(const std::string& a, const std::string& b, const std::string& out, float max, bool maxGiven,
                bool json) {
-  if (maxGiven && !(max > 0 && std::isfinite(max))) fail("--max", "must be an error > 0, got {}", max);
+  // The scale spans three decades below --max, all normal floats.
+  if (maxGiven && !(max >= 1e-30f && std::isfinite(max)))
+    fail("--max", "must be an error between 1e-30 and {:g}, got {:g}", std::numeric_limits<float>::max(), max);
   if (maxGiven && out.empty()) fail("--max", "applies to the error image: give -o too");
   if (!out.empty()) {
     checkImageOutput(out, "error image");
@@ -420,10 +440,15 @@ int runInfo(const std::string& scenePath, const std::string& range, const std::s
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Past a file size limit (ulimit -f) a write then fails with EFBIG, which every writer
+  // reports as one line, instead of SIGXFSZ ending the process mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"oblong: ray tracing displaced triangle meshes without tessellation"};
   app.require_subcommand(1);
-  // `git describe` of the source tree, as --stats records it.
-  app.set_version_flag("--version", std::string("oblong ") + OBLONG_VERSION, "print the version and exit");
+  // The release number (CMake's project version, CITATION.cff's) and `git describe` of
+  // the source tree, as --stats records it.
+  app.set_version_flag("--version", fmt::format("oblong {} ({})", OBLONG_VERSION_NUMBER, OBLONG_VERSION),
+                       "print the version and exit");
   // --help shows every option's default (subcommands copy these option defaults).
   app.option_defaults()->always_capture_default();
   std::string scenePath, statsPath, range, raysPath, hitsPath = "hits.csv", lodFlag;
@@ -554,6 +579,9 @@ int main(int argc, char** argv) {
             if (v.empty())
               fail(o->get_name(), "{}",
                    o->get_name() == "scene" ? "empty file name (omit it for the built-in scene)" : "empty value");
+    for (std::string* out : {&ro.out, &ro.statsPath, &ro.aovs, &ro.heatmap, &hitsPath, &statsPath, &bakeOut,
+                             &exportOut, &compareOut})
+      claimStandardOutput(*out);
     // Ctrl-C keeps what was rendered (render) or writes nothing (trace, export).
     if (*render || *trace || *exportCmd) catchInterrupt();
     ro.defaultOut = renderOut->count() == 0;
