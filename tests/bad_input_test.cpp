@@ -867,7 +867,7 @@ TEST_CASE("bad input: a write cut short (a full device, a file size limit) fails
   }
 }
 
-TEST_CASE("bad input: files a mesh pulls in are inputs; lying counts, deep glTF, non-finite OBJ numbers",
+TEST_CASE("bad input: files a mesh pulls in are inputs, and lying counts, deep glTF, non-finite OBJ numbers",
           "[bad_input][cli][assets]") {
   const fs::path dir = test::scratchDir("bad_input_mesh_files");
   test::writeGray((dir / "h.png").string(), 4, 4, std::vector<float>(16, 0.5f), OIIO::TypeDesc::UINT8);
