@@ -263,3 +263,38 @@ def test_import_without_numpy_hints():
     msg = r.stdout
     assert "oblong needs numpy" in msg and "/usr/bin/python3" in msg and "install numpy" in msg, msg
     assert sys.executable in msg
+
+
+@pytest.mark.parametrize("ext", [".bin", ".csv"])
+def test_cli_trace_refuses_more_rays_than_memory(cli, tmp_path, ext):
+    # `oblong trace` holds the rays, their hits and the hits file at once: more than the
+    # budget is one line before the scene loads (4M rays under a 20M limit ran, 774 MB).
+    scene = tmp_path / "plane.json"
+    scene.write_text(__import__("json").dumps(plane_scene(COBBLES)))
+    n = 100_000
+    rays = tmp_path / ("rays" + ext)
+    rows = np.tile(np.array([0.1, 2.0, 0.1, 0.0, -1.0, 0.0, 0.0, np.inf], np.float32), (n, 1))
+    if ext == ".bin":
+        rows.astype("<f4").tofile(rays)
+    else:
+        rays.write_text("ox,oy,oz,dx,dy,dz,tmin,tmax\n" + "0.1,2,0.1,0,-1,0,0,inf\n" * n)
+    hits = tmp_path / "hits.csv"
+    r = subprocess.run([cli.binary, "trace", scene, "--rays", rays, "-o", hits], capture_output=True, text=True,
+                       env={**os.environ, "OBLONG_MEMORY_LIMIT": "8M"})
+    assert r.returncode == 1, r.stderr
+    assert r.stderr.count("\n") == 1, r.stderr
+    assert r.stderr.startswith(f"oblong: {rays}: tracing {n} rays needs "), r.stderr
+    assert "that OBLONG_MEMORY_LIMIT allows" in r.stderr and "rays fit: split the ray file" in r.stderr
+    assert not hits.exists()
+    # What fits is traced.
+    fit = int(r.stderr.split("at most ")[1].split()[0])
+    assert 1000 < fit < n
+    small = tmp_path / ("small" + ext)
+    if ext == ".bin":
+        rows[:1000].astype("<f4").tofile(small)
+    else:
+        small.write_text("ox,oy,oz,dx,dy,dz,tmin,tmax\n" + "0.1,2,0.1,0,-1,0,0,inf\n" * 1000)
+    r = subprocess.run([cli.binary, "trace", scene, "--rays", small, "-o", hits, "-q"], capture_output=True,
+                       text=True, env={**os.environ, "OBLONG_MEMORY_LIMIT": "8M"})
+    assert r.returncode == 0, r.stderr
+    assert hits.exists()
