@@ -152,7 +152,9 @@ std::string pythonMessage(const std::string& m) {
   std::string out;
   size_t i = 0;
   while (i < m.size()) {
-    const bool starts = m.compare(i, 2, "--") == 0 && (i == 0 || (!word(m[i - 1]) && m[i - 1] != '/' && m[i - 1] != '.'));
+    // Not inside a path or a quoted value (a scene's unknown key '--range' stays as given).
+    const bool starts = m.compare(i, 2, "--") == 0 &&
+                        (i == 0 || (!word(m[i - 1]) && std::strchr("/.'\"", m[i - 1]) == nullptr));
     if (!starts) {
       out += m[i++];
       continue;

@@ -122,6 +122,6 @@ def as_python(msg):
     values = "|".join(["cone", "off", "cpu", "vulkan", *oblong.range_queries(), *oblong.inverters(),
                        *oblong.splitters(), *oblong.baselines()])
     msg = re.sub(rf"--([a-z-]+) ({values})\b", lambda m: f"{kw(m[1])}='{m[2]}'", msg)
-    msg = re.sub(r"(?<![\w/.-])--([a-z-]+)", lambda m: kw(m[1]) + "=", msg)
+    msg = re.sub(r"(?<![\w/.'\"-])--([a-z-]+)", lambda m: kw(m[1]) + "=", msg)
     assert "--" not in msg, msg
     return msg

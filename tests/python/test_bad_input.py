@@ -248,6 +248,13 @@ def test_messages_name_keywords_not_flags(plane):
         assert "--" not in str(e.value)
 
 
+def test_quoted_flag_kept(tmp_path):
+    # Only the command line's flags are translated: a scene's own text stays as given.
+    with pytest.raises(oblong.Error) as e:
+        oblong.load_dict({**plane_scene(COBBLES), "--range": 1})
+    assert "'--range'" in str(e.value)
+
+
 def test_import_without_numpy_hints():
     # Another interpreter than Debian's /usr/bin/python3 (the one the module is built
     # for) has no numpy: the import says so and what to do.
