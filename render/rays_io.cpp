@@ -2,10 +2,12 @@
 
 #include "core/error.h"
 #include "core/input_file.h"
+#include "core/memory.h"
 #include "render/output.h"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <charconv>
 #include <cstdint>
@@ -122,6 +124,37 @@ std::vector<Ray> readRays(const std::string& path) {
     rays.push_back(r);
   }
   return rays;
+}
+
+void checkTraceFits(const std::string& raysPath, const std::string& hitsPath) {
+  checkRegular(raysPath);
+  std::ifstream f(raysPath, std::ios::binary);
+  if (!f) fail(raysPath, "cannot open ray file");
+  size_t n = 0;
+  if (endsWith(raysPath, ".bin")) {
+    f.seekg(0, std::ios::end);
+    n = size_t(std::max<std::streamoff>(0, f.tellg())) / 32;
+  } else {
+    // Lines, read in blocks: an upper bound (blank lines are skipped when read).
+    std::vector<char> buf(size_t(1) << 20);
+    size_t lines = 0;
+    char last = '\n';
+    while (f.read(buf.data(), std::streamsize(buf.size())) || f.gcount() > 0) {
+      const size_t got = size_t(f.gcount());
+      lines += size_t(std::count(buf.data(), buf.data() + got, '\n'));
+      last = buf[got - 1];
+    }
+    lines += last != '\n';
+    n = lines > 0 ? lines - 1 : 0;  // the header
+  }
+  // The rays twice (a .bin's buffer, or the vector growing as a CSV is read), their hits,
+  // and the hits file's text: a .bin's records, or a CSV line of at most ~64 bytes in a
+  // string that grows by doubling.
+  const size_t perRay = 2 * sizeof(Ray) + sizeof(Hit) + (endsWith(hitsPath, ".bin") ? kHitBytes : 2 * 64);
+  const size_t budget = structureBudgetBytes();
+  checkFits(raysPath, fmt::format("tracing {} rays", n), n * perRay,
+            fmt::format("at most {} rays fit: split the ray file", budget / perRay),
+            fmt::format("the rays, their hits and the hits file: {} bytes per ray", perRay));
 }
 
 void writeRays(const std::string& path, const std::vector<Ray>& rays) {

@@ -24,6 +24,11 @@ std::vector<Ray> readRays(const std::string& path);
 // One ray as readRays checks it (finite, within the coordinate limit, a normalisable
 // direction, 0 <= tmin <= tmax); throws oblong::Error naming `where`.
 void checkRay(const Ray& r, const std::string& where);
+// Throws oblong::Error naming the ray file, before it is read, when `oblong trace` of it
+// would hold more than the memory budget (core/memory.h): the rays, their hits and the
+// hits file's text for `hitsPath`, per ray; the rays counted without parsing them (a
+// .bin's size over 32 bytes, a CSV's lines after the header).
+void checkTraceFits(const std::string& raysPath, const std::string& hitsPath);
 void writeRays(const std::string& path, const std::vector<Ray>& rays);  // by extension
 // CSV, or binary for a name ending in .bin (as writeRays and readRays).
 void writeHits(const std::string& path, const std::vector<Hit>& hits);

@@ -271,6 +271,8 @@ int runTrace(const std::string& scenePath, const std::string& raysPath, const st
   const std::vector<std::pair<std::string, std::string>> outputs = {{"-o", out}, {"--stats", statsPath}};
   checkDistinctOutputs(outputs);
   checkNotInputs(outputs, {{"scene", scenePath}, {"--rays", raysPath}});
+  // More rays than memory holds are refused before the scene loads or a ray is read.
+  checkTraceFits(raysPath, out);
   const auto start = std::chrono::steady_clock::now();
   Scene scene = sceneFrom(scenePath, assetFlags);
   checkNotInputs(outputs, sceneInputs(scenePath, scene));

@@ -3,6 +3,7 @@ PYTHONPATH to the module's folder, OBLONG_BINARY to the command line and
 OBLONG_SOURCE_DIR to the source tree)."""
 import json
 import os
+import re
 import subprocess
 from pathlib import Path
 
@@ -100,3 +101,27 @@ def plane_scene(map_path, **strategies):
 def write_json(path, obj):
     Path(path).write_text(json.dumps(obj, indent=1))
     return path
+
+
+# The module's keywords, each the command line's flag of the same name (`max_depth` is
+# `--max-depth`).
+KEYWORDS = {"range", "inverter", "splitter", "baseline", "marching_scale", "inversion_in_traversal", "step", "lod",
+            "lod_bias", "size", "spp", "integrator", "max_depth", "normals", "seed", "threads", "device",
+            "displacement", "scale", "bias", "tiling"}
+
+
+def as_python(msg):
+    """The command line's message as the module says it: `--spp: ...` is `spp: ...`, and a
+    flag inside the text its keyword (`--baseline fixedstep` is `baseline='fixedstep'`)."""
+    def kw(flag):
+        k = flag.replace("-", "_")
+        assert k in KEYWORDS, flag
+        return k
+
+    msg = re.sub(r"^--([a-z-]+):", lambda m: kw(m[1]) + ":", msg)
+    values = "|".join(["cone", "off", "cpu", "vulkan", *oblong.range_queries(), *oblong.inverters(),
+                       *oblong.splitters(), *oblong.baselines()])
+    msg = re.sub(rf"--([a-z-]+) ({values})\b", lambda m: f"{kw(m[1])}='{m[2]}'", msg)
+    msg = re.sub(r"(?<![\w/.'\"-])--([a-z-]+)", lambda m: kw(m[1]) + "=", msg)
+    assert "--" not in msg, msg
+    return msg
