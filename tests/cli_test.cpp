@@ -72,7 +72,8 @@ TEST_CASE("oblong info reports the range-query structures built for the scene", 
   const Run list = run("info --strategies --json");
   REQUIRE(list.status == 0);
   std::vector<std::string> names;
-  for (const auto& e : nlohmann::json::parse(list.out).at("range")) names.push_back(e.at("name"));
+  const nlohmann::json strategies = nlohmann::json::parse(list.out);
+  for (const auto& e : strategies.at("range")) names.push_back(e.at("name"));
   REQUIRE(!names.empty());
   for (const std::string& name : names) {
     const Run r = run("info --range " + name);
