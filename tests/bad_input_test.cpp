@@ -721,7 +721,8 @@ TEST_CASE("outputs: PFM, default names said, statistics of the run", "[bad_input
   const auto j = nlohmann::json::parse(f);
   CHECK(j.at("version").get<std::string>().size() > 0);
   CHECK(j.at("peak_memory").get<int64_t>() > 1 << 20);
-  CHECK(j.at("seconds").at("load").get<double>() >= 0);
+  CHECK(j.at("seconds").at("load").get<double>() > 0);  // measured, not left at zero
+  CHECK(j.at("seconds").at("load").get<double>() <= j.at("seconds").at("total").get<double>());
   CHECK(j.at("seconds").at("total").get<double>() >= j.at("seconds").at("render").get<double>());
   CHECK(j.at("threads").at("used").get<int>() >= 1);
   CHECK(j.at("partial") == false);

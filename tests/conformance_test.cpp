@@ -342,29 +342,28 @@ std::string stripObj(const vec3& at) {
   return obj;
 }
 
-const char* kAsteroid = OBLONG_SOURCE_DIR "/scenes/asteroid.json";
+const std::string kAsteroid = test::shippedScene("asteroid.json");  // the build's copy
 const char* kSphere = OBLONG_SOURCE_DIR "/scenes/sphere.json";  // 3968 triangles, pole caps, u seam
 
 }  // namespace
 
-TEST_CASE("conformance: every combination agrees with the oracles on a tiled quad", "[conformance]") {
+TEST_CASE("conformance: every combination agrees with the oracles on a tiled quad", "[conformance][bruteforce][tessellated]") {
   runConformance(tiledQuadScene(), 150);
 }
 
-TEST_CASE("conformance: every combination agrees with the oracles on a displaced torus", "[conformance]") {
+TEST_CASE("conformance: every combination agrees with the oracles on a displaced torus", "[conformance][bruteforce][tessellated][unit]") {
   runConformance(torusScene(), 150);
 }
 
-TEST_CASE("conformance: every combination agrees with the oracles on the asteroid", "[conformance]") {
-  REQUIRE(std::filesystem::exists("/usr/share/glmark2/models/asteroid-low.3ds"));  // scripts/setup.sh installs it
+TEST_CASE("conformance: every combination agrees with the oracles on the asteroid", "[conformance][bruteforce][tessellated]") {
   runConformance(loadScene(kAsteroid), 100);
 }
 
-TEST_CASE("conformance: every combination agrees with the oracles on a displaced sphere", "[conformance]") {
+TEST_CASE("conformance: every combination agrees with the oracles on a displaced sphere", "[conformance][bruteforce][tessellated]") {
   runConformance(loadScene(kSphere), 150);
 }
 
-TEST_CASE("conformance: every combination agrees with the oracles on elongated and one-row maps", "[conformance][elongated]") {
+TEST_CASE("conformance: every combination agrees with the oracles on elongated and one-row maps", "[conformance][elongated][bruteforce][tessellated]") {
   // Few rays: the brute force tests every micro-triangle of a 2-triangle plane (~30 000).
   const Scene flat = elongatedScene(16384, 1, true);
   runConformance(flat, 12);
@@ -635,7 +634,7 @@ TEST_CASE("translation: a strip authored at an offset traces as at the origin, b
   }
 }
 
-TEST_CASE("grazing rays: canonical takes fewer steps than the driver with mipmap and quad-tree", "[conformance][grazing]") {
+TEST_CASE("grazing rays: canonical takes fewer steps than the driver with mipmap and quad-tree", "[conformance][grazing][minmax_mipmap][quadtree]") {
   // bench_traversal's grazing family (0.5-6 degrees off the base surface). Step counts
   // are deterministic; measured 2026-12-02: sphere (8 % relief) 17.2 against 42.2 steps
   // per ray, tiled quad 35.7 against 67.8 (docs/traversal.md, "Grazing rays").
@@ -666,7 +665,7 @@ TEST_CASE("conformance (large): millions of rays", "[conformance][.large]") {
   runConformance(loadScene(kSphere), 10000);
 }
 
-TEST_CASE("fixedstep baseline is approximate but finds most hits", "[conformance][fixedstep]") {
+TEST_CASE("fixedstep baseline is approximate but finds most hits", "[conformance][fixedstep][unit]") {
   const Scene s = tiledQuadScene();
   const EmbreeScene tess(s, AccelOptions::withBaseline("tessellated"));
   AccelOptions fs;

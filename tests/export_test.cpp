@@ -188,7 +188,7 @@ Scene reimport(const Scene& scene, const fs::path& dir, const std::string& name)
 
 }  // namespace
 
-TEST_CASE("export: the exported triangles trace as --baseline tessellated, bit for bit", "[export]") {
+TEST_CASE("export: the exported triangles trace as --baseline tessellated, bit for bit", "[export][tessellated][unit]") {
   const fs::path dir = test::scratchDir("export_reimport");
   Scene scene = loadScene(writeScene(dir));
   const std::vector<Ray> rays = raysAround(20000);
@@ -250,7 +250,7 @@ TEST_CASE("export: the exported triangles trace as --baseline tessellated, bit f
   }
 }
 
-TEST_CASE("export: counts, header and refusals", "[export]") {
+TEST_CASE("export: counts, header and refusals", "[export][unit]") {
   const fs::path dir = test::scratchDir("export_plan");
   const Scene scene = loadScene(writeScene(dir));
   const ExportPlan plan = planExport(scene);

@@ -10,10 +10,10 @@ set -euo pipefail
 BUILD="$(realpath "${1:?usage: gpu_bundle_test.sh BUILD_DIR SOURCE_DIR}")"
 SRC="$(realpath "${2:?}")"
 export GALLIVM_PERF="${GALLIVM_PERF:-nopt}"
-export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-${TMPDIR:-/tmp}/oblong_vulkan_test_shader_cache}"
 fail() { echo "gpu_bundle_test: FAIL: $*" >&2; exit 1; }
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
+export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$TMP/shader_cache}"
 
 OBLONG_BUNDLE_SCENES='quad_tiled quad_tiled@1' OBLONG_PARITY_SIZE=48x32 bash "$SRC/scripts/gpu_bundle.sh" "$TMP/bundle" "$BUILD" \
   >"$TMP/bundle.log" 2>&1 || { cat "$TMP/bundle.log"; fail "gpu_bundle.sh failed"; }

@@ -22,7 +22,7 @@ std::vector<float> ramp(int w, int h) {
 }
 }  // namespace
 
-TEST_CASE("height maps load 8-bit, 16-bit and float PNG/TIFF/EXR of any size", "[heightmap]") {
+TEST_CASE("height maps load 8-bit, 16-bit and float PNG/TIFF/EXR of any size", "[heightmap][unit]") {
   const auto dir = test::scratchDir("heightmap");
   const int w = 5, h = 3;  // not powers of two
   const auto v = ramp(w, h);
@@ -65,7 +65,7 @@ TEST_CASE("height maps load 8-bit, 16-bit and float PNG/TIFF/EXR of any size", "
   CHECK(f.atUnchecked(1, 1) == Approx(0.0f));
 }
 
-TEST_CASE("bad height maps give an error naming the file", "[heightmap]") {
+TEST_CASE("bad height maps give an error naming the file", "[heightmap][unit]") {
   const auto dir = test::scratchDir("heightmap_bad");
   const std::string missing = (dir / "missing.png").string();
   REQUIRE_THROWS_WITH(HeightMap::load(missing), Catch::Contains(missing));
@@ -86,7 +86,7 @@ TEST_CASE("bad height maps give an error naming the file", "[heightmap]") {
   REQUIRE_THROWS_WITH(HeightMap::load(nan), Catch::Contains("non-finite height at texel (0, 1)"));
 }
 
-TEST_CASE("bilinear heights use texel centres, wrap addressing, scale, bias and tiling", "[heightmap]") {
+TEST_CASE("bilinear heights use texel centres, wrap addressing, scale, bias and tiling", "[heightmap][unit]") {
   const int w = 4, h = 3;
   auto map = std::make_shared<const HeightMap>(w, h, ramp(w, h));
   Displacement d{map, 2.0f, -0.25f, vec2(1.0f)};
@@ -115,7 +115,7 @@ TEST_CASE("bilinear heights use texel centres, wrap addressing, scale, bias and 
   CHECK(d.microAtSample(diag) == Approx(2.0f * (0.5f * (map->at(1, 1) + map->at(2, 2)) - 0.25f)));
 }
 
-TEST_CASE("procedural default map is tileable and in [0,1]", "[heightmap]") {
+TEST_CASE("procedural default map is tileable and in [0,1]", "[heightmap][unit]") {
   const HeightMap m = proceduralHeightMap(96, 64, 3);
   const Interval r = m.range();
   CHECK(r.lo >= 0.0f);
@@ -152,7 +152,7 @@ std::string be32(uint32_t v) {
 }
 }  // namespace
 
-TEST_CASE("heights of a grey+alpha map are the grey values, not multiplied by alpha", "[heightmap]") {
+TEST_CASE("heights of a grey+alpha map are the grey values, not multiplied by alpha", "[heightmap][unit]") {
   const auto dir = test::scratchDir("heightmap_alpha");
   const std::vector<float> grey = {0.6f, 0.2f, 1.0f, 0.4f};
   for (const char* ext : {"png", "tif"})
@@ -173,7 +173,7 @@ TEST_CASE("heights of a grey+alpha map are the grey values, not multiplied by al
       }
 }
 
-TEST_CASE("a header claiming more pixels than the file can hold is refused before allocating", "[heightmap]") {
+TEST_CASE("a header claiming more pixels than the file can hold is refused before allocating", "[heightmap][unit]") {
   const auto dir = test::scratchDir("heightmap_claims");
   // A valid 1x1 PNG, its IHDR patched to 16384x16384 (CRC fixed): 67 bytes that
   // OpenImageIO read into a 1.1 GiB buffer before it failed.
@@ -202,7 +202,7 @@ TEST_CASE("a header claiming more pixels than the file can hold is refused befor
 }
 
 TEST_CASE("PNG chunks and EXR attributes claiming more than the file holds are refused before allocating",
-          "[heightmap][bad_input]") {
+          "[heightmap][bad_input][unit]") {
   const auto dir = test::scratchDir("heightmap_lengths");
   // A zTXt chunk claiming 0x7FFFFFF0 bytes in a 2 KB PNG: libpng allocated 2.2 GB first.
   const std::string one = (dir / "one.png").string();

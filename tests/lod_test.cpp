@@ -38,7 +38,7 @@ HeightMap randomMap(int w, int h, unsigned seed) {
 
 }  // namespace
 
-TEST_CASE("lod: a level exists while 2^k divides both sizes and leaves 2 samples", "[lod]") {
+TEST_CASE("lod: a level exists while 2^k divides both sizes and leaves 2 samples", "[lod][unit]") {
   CHECK(lodLevels(randomMap(32, 32, 1)) == 4);
   CHECK(lodLevels(randomMap(384, 256, 1)) == 7);  // the default scene's map: 3x2 at level 7
   CHECK(lodLevels(randomMap(64, 40, 1)) == 3);
@@ -49,7 +49,7 @@ TEST_CASE("lod: a level exists while 2^k divides both sizes and leaves 2 samples
   CHECK_THROWS_AS(downsampleLevel(randomMap(6, 5, 1)), Error);
 }
 
-TEST_CASE("lod: level k+1 is the tent filter of level k at the even samples, wrapped", "[lod]") {
+TEST_CASE("lod: level k+1 is the tent filter of level k at the even samples, wrapped", "[lod][unit]") {
   const HeightMap m = randomMap(12, 8, 2);
   const HeightMap c = downsampleLevel(m);
   REQUIRE(c.width() == 6);
@@ -68,7 +68,7 @@ TEST_CASE("lod: level k+1 is the tent filter of level k at the even samples, wra
   CHECK(r1.hi <= r0.hi);
 }
 
-TEST_CASE("lod: the grids nest, and the surface is continuous in lambda", "[lod]") {
+TEST_CASE("lod: the grids nest, and the surface is continuous in lambda", "[lod][unit]") {
   auto map = std::make_shared<const HeightMap>(randomMap(64, 32, 3));
   const Displacement d0{map, 0.3f, -0.5f, vec2(2.0f, 3.0f)};
   REQUIRE(lodLevels(*map) == 4);
@@ -121,7 +121,7 @@ TEST_CASE("lod: the grids nest, and the surface is continuous in lambda", "[lod]
   CHECK(back.sampleOffset == 0.5);
 }
 
-TEST_CASE("lod: setLod moves every displaced mesh, shares levels, and off restores level 0", "[lod]") {
+TEST_CASE("lod: setLod moves every displaced mesh, shares levels, and off restores level 0", "[lod][unit]") {
   Scene s = defaultScene();
   const auto full = s.meshes[0].displacement->map;
   setLod(s, 2.5f, "test");
@@ -139,7 +139,7 @@ TEST_CASE("lod: setLod moves every displaced mesh, shares levels, and off restor
   CHECK_THROWS_AS(setLod(s, -0.5f, "test"), Error);
 }
 
-TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot from inside", "[lod][watertight]") {
+TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot from inside", "[lod][watertight][bruteforce][tessellated]") {
   Scene s = closedTorus();
   for (const float lod : {0.5f, 1.75f, 3.25f}) {
     setLod(s, lod, "test");
@@ -155,7 +155,7 @@ TEST_CASE("lod: a closed displaced torus at fractional lambda leaks no ray shot 
   }
 }
 
-TEST_CASE("lod: a closed displaced torus with a lambda per ray leaks no ray shot from inside", "[lod][watertight]") {
+TEST_CASE("lod: a closed displaced torus with a lambda per ray leaks no ray shot from inside", "[lod][watertight][unit]") {
   Scene s = closedTorus();
   setLodCone(s);
   AccelOptions canonical, brute;
@@ -170,7 +170,7 @@ TEST_CASE("lod: a closed displaced torus with a lambda per ray leaks no ray shot
   }
 }
 
-TEST_CASE("lod: the per-ray blend reads the heights of the whole-scene surface at that lambda", "[lod]") {
+TEST_CASE("lod: the per-ray blend reads the heights of the whole-scene surface at that lambda", "[lod][unit]") {
   auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 48, 4));
   const Displacement d0{map, 0.2f, -0.5f, vec2(2.0f, 1.0f)};
   const auto levels = lodPyramid(map);
@@ -191,7 +191,7 @@ TEST_CASE("lod: the per-ray blend reads the heights of the whole-scene surface a
   }
 }
 
-TEST_CASE("lod: a lambda per ray on a map without levels traces level 0", "[lod]") {
+TEST_CASE("lod: a lambda per ray on a map without levels traces level 0", "[lod][unit]") {
   Scene s = closedTorus();
   s.meshes[0].displacement->map = std::make_shared<const HeightMap>(proceduralHeightMap(63, 47, 9));  // odd: no level
   AccelOptions level0, perRay;

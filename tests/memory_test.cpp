@@ -75,7 +75,7 @@ std::vector<QueryNeeds> needsFor(const HeightMap& m) {
 
 }  // namespace
 
-TEST_CASE("byte sizes parse with K/M/G/T suffixes and print with three digits", "[memory]") {
+TEST_CASE("byte sizes parse with K/M/G/T suffixes and print with three digits", "[memory][unit]") {
   CHECK(parseByteSize("0") == size_t(0));
   CHECK(parseByteSize("1234") == size_t(1234));
   CHECK(parseByteSize("512K") == size_t(512) << 10);
@@ -92,7 +92,7 @@ TEST_CASE("byte sizes parse with K/M/G/T suffixes and print with three digits", 
   CHECK(humanBytes(size_t(18) << 30) == "18.0 GiB");
 }
 
-TEST_CASE("OBLONG_MEMORY_LIMIT replaces the measured available memory", "[memory]") {
+TEST_CASE("OBLONG_MEMORY_LIMIT replaces the measured available memory", "[memory][unit]") {
   {
     MemoryLimit none(nullptr);
     const size_t avail = availableMemoryBytes();
@@ -116,7 +116,7 @@ TEST_CASE("OBLONG_MEMORY_LIMIT replaces the measured available memory", "[memory
   }
 }
 
-TEST_CASE("range-query estimates equal the bytes of the built structures", "[memory][range_query]") {
+TEST_CASE("range-query estimates equal the bytes of the built structures", "[memory][range_query][rmip][minmax_mipmap][safety_zones]") {
   MemoryLimit none(nullptr);
   for (auto [W, H] : std::vector<std::pair<int, int>>{{1, 1}, {3, 7}, {64, 64}, {100, 37}, {257, 130}, {1024, 1024}}) {
     const auto map = randomMap(W, H, uint32_t(W * 31 + H));
@@ -161,7 +161,7 @@ TEST_CASE("range-query estimates equal the bytes of the built structures", "[mem
   }
 }
 
-TEST_CASE("a range query that does not fit is refused in one line with what would fit", "[memory][range_query]") {
+TEST_CASE("a range query that does not fit is refused in one line with what would fit", "[memory][range_query][rmip][minmax_mipmap][safety_zones][unit]") {
   const auto map = randomMap(1024, 1024, 7);
   const Displacement d{map, 0.5f, 0.0f, vec2(1.0f)};
   const QueryNeeds needs = QueryNeeds::all(*map);
@@ -227,7 +227,7 @@ size_t part(const MemoryReport& r, const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("the tessellation estimate counts the micro-triangles the baseline builds", "[memory][render]") {
+TEST_CASE("the tessellation estimate counts the micro-triangles the baseline builds", "[memory][render][tessellated][unit]") {
   MemoryLimit none(nullptr);
   auto odd = std::make_shared<const HeightMap>(proceduralHeightMap(61, 47, 9));
   auto square = std::make_shared<const HeightMap>(proceduralHeightMap(128, 128, 3));
@@ -264,7 +264,7 @@ TEST_CASE("the tessellation estimate counts the micro-triangles the baseline bui
   }
 }
 
-TEST_CASE("a tessellation that does not fit is refused before it is built", "[memory][render]") {
+TEST_CASE("a tessellation that does not fit is refused before it is built", "[memory][render][tessellated]") {
   auto map = std::make_shared<const HeightMap>(proceduralHeightMap(256, 256, 5));
   const Scene s = displacedScene(planeMesh(vec2(2.0f), ivec2(1)), map, vec2(1.0f));
   const TessellationEstimate e = estimateTessellation(s.meshes[0].mesh, *s.meshes[0].displacement);

@@ -45,7 +45,7 @@ vec3 at(const Mesh& m, size_t v) { return vec3(m.world(v)); }
 
 }  // namespace
 
-TEST_CASE("OBJ with uvs and normals: positions, uvs, triangles, normals normalised", "[mesh]") {
+TEST_CASE("OBJ with uvs and normals: positions, uvs, triangles, normals normalised", "[mesh][unit]") {
   // A unit quad of two triangles; the file's normals have length 2.
   const auto path = writeFile("quad.obj",
                               "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
@@ -80,7 +80,7 @@ TEST_CASE("OBJ with uvs and normals: positions, uvs, triangles, normals normalis
   CHECK(m.bytes() == 4 * sizeof(vec3) * 2 + 4 * sizeof(vec2) + 2 * sizeof(glm::uvec3) + 2 * sizeof(uint32_t));
 }
 
-TEST_CASE("ASCII PLY with uvs: quads are triangulated", "[mesh]") {
+TEST_CASE("ASCII PLY with uvs: quads are triangulated", "[mesh][unit]") {
   const auto path = writeFile("quad.ply",
                               "ply\nformat ascii 1.0\nelement vertex 4\n"
                               "property float x\nproperty float y\nproperty float z\n"
@@ -97,7 +97,7 @@ TEST_CASE("ASCII PLY with uvs: quads are triangulated", "[mesh]") {
   }
 }
 
-TEST_CASE("smooth normals are area-weighted, unit, and shared across uv seams", "[mesh]") {
+TEST_CASE("smooth normals are area-weighted, unit, and shared across uv seams", "[mesh][unit]") {
   const auto path = writeFile("tent.obj", kTent);
   const Mesh m = loadMesh(path, {glm::mat4(1.0f), true});
   REQUIRE(m.triangles.size() == 2);
@@ -124,7 +124,7 @@ TEST_CASE("smooth normals are area-weighted, unit, and shared across uv seams", 
   CHECK(copy.normals == m.normals);
 }
 
-TEST_CASE("zero normals in the file are replaced by smooth normals", "[mesh]") {
+TEST_CASE("zero normals in the file are replaced by smooth normals", "[mesh][unit]") {
   const auto path = writeFile("zeronormal.obj",
                               "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nvn 0 0 3\n"
                               "f 1//1 2//2 3//1\n");
@@ -135,7 +135,7 @@ TEST_CASE("zero normals in the file are replaced by smooth normals", "[mesh]") {
   CHECK(m.triangle(0).t[1] == vec2(0.0f));  // no uvs: t = 0
 }
 
-TEST_CASE("several objects in one file are concatenated", "[mesh]") {
+TEST_CASE("several objects in one file are concatenated", "[mesh][unit]") {
   const auto path = writeFile("two.obj",
                               "o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
                               "o b\nv 5 0 0\nv 6 0 0\nv 5 1 0\nv 6 1 0\nf 4 5 6\nf 5 7 6\n");
@@ -152,7 +152,7 @@ TEST_CASE("several objects in one file are concatenated", "[mesh]") {
   CHECK(box.hi == vec3(6, 1, 0));
 }
 
-TEST_CASE("transforms move positions and normals (inverse transpose)", "[mesh]") {
+TEST_CASE("transforms move positions and normals (inverse transpose)", "[mesh][unit]") {
   const auto path = writeFile("tent_t.obj", kTent);
   const Mesh base = loadMesh(path);
   // Non-uniform scale: the normal (-2,0,1) becomes (-1,0,1) under the inverse transpose.
@@ -186,7 +186,7 @@ TEST_CASE("transforms move positions and normals (inverse transpose)", "[mesh]")
   CHECK_THROWS_WITH(transformMesh(flat, glm::scale(glm::mat4(1.0f), vec3(1, 0, 1))), Contains("singular"));
 }
 
-TEST_CASE("bad meshes give one-line errors naming the file", "[mesh]") {
+TEST_CASE("bad meshes give one-line errors naming the file", "[mesh][unit]") {
   SECTION("missing file") {
     const std::string path = (test::scratchDir("mesh") / "does_not_exist.obj").string();
     CHECK_THROWS_MATCHES(loadMesh(path), Error, Catch::Matchers::Message(path + ": file not found"));
@@ -232,10 +232,10 @@ TEST_CASE("bad meshes give one-line errors naming the file", "[mesh]") {
   }
 }
 
-TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map, high: the reference)", "[mesh]") {
-  const std::string low = "/usr/share/glmark2/models/asteroid-low.3ds";
-  const std::string high = "/usr/share/glmark2/models/asteroid-high.3ds";
-  // Installed by the set-up script (glmark2-data): its absence is a broken set-up.
+TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map, high: the reference)", "[mesh][unit]") {
+  // The build's copy of glmark2-data's models (tests/test_data.cmake).
+  const std::string low = OBLONG_TEST_DATA "/glmark2/models/asteroid-low.3ds";
+  const std::string high = OBLONG_TEST_DATA "/glmark2/models/asteroid-high.3ds";
   REQUIRE(std::filesystem::exists(low));
   REQUIRE(std::filesystem::exists(high));
   const Mesh m = loadMesh(low, {glm::mat4(1.0f), true});
@@ -260,7 +260,7 @@ TEST_CASE("the glmark2 asteroid loads (low: uvs for the height map, high: the re
   CHECK_FALSE(h.hasUVs());
 }
 
-TEST_CASE("degenerate triangles are skipped with a warning, not an error", "[mesh][bad_input]") {
+TEST_CASE("degenerate triangles are skipped with a warning, not an error", "[mesh][bad_input][unit]") {
   // Triangle 1 repeats a vertex, triangle 2 has three collinear vertices, triangle 3 has
   // a zero-area uv triangle (all uvs equal): skipped only when the mesh is displaced.
   const auto path = writeFile("degenerate.obj",
@@ -278,7 +278,7 @@ TEST_CASE("degenerate triangles are skipped with a warning, not an error", "[mes
   for (const vec3& n : displaced.normals) CHECK(glm::length(n) == Approx(1.0f));
 }
 
-TEST_CASE("a mesh whose triangles are all degenerate is an error", "[mesh][bad_input]") {
+TEST_CASE("a mesh whose triangles are all degenerate is an error", "[mesh][bad_input][unit]") {
   const auto path = writeFile("alldegenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n");
   CHECK_THROWS_MATCHES(loadMesh(path, {glm::mat4(1.0f), false, false}), Error,
                        Catch::Matchers::Message(path + ": all 2 triangles are degenerate (zero area: 2)"));
@@ -293,7 +293,7 @@ TEST_CASE("a mesh whose triangles are all degenerate is an error", "[mesh][bad_i
                     Contains(tiny + ": all 1 triangles are degenerate (zero area: 1)"));
 }
 
-TEST_CASE("normals that cancel inside a displaced triangle are an error", "[mesh][bad_input]") {
+TEST_CASE("normals that cancel inside a displaced triangle are an error", "[mesh][bad_input][unit]") {
   // Opposite vertex normals: N(b) vanishes on the edge between them, so N/|N| (the
   // displacement direction) is undefined. Fine for a plain mesh.
   const auto path = writeFile("cancelinside.obj",
@@ -304,12 +304,12 @@ TEST_CASE("normals that cancel inside a displaced triangle are an error", "[mesh
                     Contains(path + ": triangle 0: its vertex normals cancel"));
 }
 
-TEST_CASE("coordinates whose triangle areas overflow are an error", "[mesh][bad_input]") {
+TEST_CASE("coordinates whose triangle areas overflow are an error", "[mesh][bad_input][unit]") {
   const auto path = writeFile("huge.obj", "v 0 0 0\nv 3e38 0 0\nv 0 3e38 0\nf 1 2 3\n");
   CHECK_THROWS_WITH(loadMesh(path), Contains(path + ": triangle 0: its area overflows"));
 }
 
-TEST_CASE("finishMesh checks generated meshes like loaded ones", "[mesh][bad_input]") {
+TEST_CASE("finishMesh checks generated meshes like loaded ones", "[mesh][bad_input][unit]") {
   Mesh m;
   m.name = "<test>";
   CHECK_THROWS_WITH(finishMesh(m, {}), Contains("<test>: mesh has no triangles"));
@@ -323,7 +323,7 @@ TEST_CASE("finishMesh checks generated meshes like loaded ones", "[mesh][bad_inp
   for (const vec3& n : m.normals) CHECK(n == vec3(0, 0, 1));  // smooth normals filled in
 }
 
-TEST_CASE("procedural plane and sphere: outward normals, seams bit-identical, nothing degenerate", "[mesh]") {
+TEST_CASE("procedural plane and sphere: outward normals, seams bit-identical, nothing degenerate", "[mesh][unit]") {
   const Mesh plane = planeMesh(vec2(3, 2), ivec2(3, 4), vec2(0.1f, 0.2f), vec2(0.9f, 0.7f));
   CHECK(plane.triangles.size() == 24);
   for (size_t i = 0; i < plane.triangles.size(); ++i) {
@@ -422,7 +422,7 @@ std::map<std::tuple<float, float, float>, vec2> uvByPosition(const Mesh& m) {
 
 }  // namespace
 
-TEST_CASE("uvs come out as the file stores them: OBJ, PLY, glTF and GLB agree", "[mesh]") {
+TEST_CASE("uvs come out as the file stores them: OBJ, PLY, glTF and GLB agree", "[mesh][unit]") {
   // assimp flips glTF's v (v' = 1 - v) and keeps OBJ's and PLY's; loadMesh undoes the flip.
   std::string obj, ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
                          "property float z\nproperty float s\nproperty float t\nelement face 2\n"
@@ -450,7 +450,7 @@ TEST_CASE("uvs come out as the file stores them: OBJ, PLY, glTF and GLB agree", 
   }
 }
 
-TEST_CASE("normals \"smooth\": per-face normals of split vertices become one normal per position", "[mesh]") {
+TEST_CASE("normals \"smooth\": per-face normals of split vertices become one normal per position", "[mesh][unit]") {
   // A unit cube exported flat: 6 face normals, each corner split into three vertices.
   std::string obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
                     "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
@@ -483,7 +483,7 @@ TEST_CASE("normals \"smooth\": per-face normals of split vertices become one nor
   for (const auto& [p, ns] : fileNormals) CHECK(ns[0] != ns[1]);  // the file's: three directions
 }
 
-TEST_CASE("truncated PLY files are refused, never read past their end", "[mesh][bad_input]") {
+TEST_CASE("truncated PLY files are refused, never read past their end", "[mesh][bad_input][unit]") {
   // Binary: every cut of a valid file (assimp read past the end and crashed, even one byte
   // short) gives one error line; the whole file loads.
   std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
@@ -525,7 +525,7 @@ TEST_CASE("truncated PLY files are refused, never read past their end", "[mesh][
                     Contains("cannot load mesh (PLY header declares 4 vertex elements but the file ends after 3 of them)"));
 }
 
-TEST_CASE("a PLY header claiming more than the file holds is refused before assimp allocates", "[mesh][bad_input]") {
+TEST_CASE("a PLY header claiming more than the file holds is refused before assimp allocates", "[mesh][bad_input][unit]") {
   // assimp allocated 3.5 GiB for the first and tried 48 GB for the second.
   for (const char* count : {"300000000", "4000000000"}) {
     std::string h = fmt::format("ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\n"
@@ -556,7 +556,7 @@ TEST_CASE("a PLY header claiming more than the file holds is refused before assi
   CHECK(loadMesh(writeFile("count3.ply", head + bytesOf(v, 36) + "\x03" + bytesOf(f, 12))).triangles.size() == 1);
 }
 
-TEST_CASE("PLY headers assimp would misread are refused, and its quirks are worked around", "[mesh][bad_input]") {
+TEST_CASE("PLY headers assimp would misread are refused, and its quirks are worked around", "[mesh][bad_input][unit]") {
   const std::string vertex = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
   const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
   const std::string data = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
@@ -624,7 +624,7 @@ TEST_CASE("PLY headers assimp would misread are refused, and its quirks are work
   CHECK(noEol.positions.size() == 3);
 }
 
-TEST_CASE("positions beyond the coordinate limit after the transform are an error", "[mesh][bad_input]") {
+TEST_CASE("positions beyond the coordinate limit after the transform are an error", "[mesh][bad_input][unit]") {
   const auto far = writeFile("far.obj", "v 2e12 0 0\nv 2e12 1 0\nv 2e12 0 1\nf 1 2 3\n");
   CHECK_THROWS_WITH(loadMesh(far), Contains(far + ": vertex 0 at (") &&
                                         Contains(") lies beyond the supported coordinate range (|x|, |y|, |z| <= 2^40 = "
@@ -635,7 +635,7 @@ TEST_CASE("positions beyond the coordinate limit after the transform are an erro
                     Contains("after the transform lies beyond the supported coordinate range"));
 }
 
-TEST_CASE("inputTriangle maps triangles back to the numbering of the warning line", "[mesh]") {
+TEST_CASE("inputTriangle maps triangles back to the numbering of the warning line", "[mesh][unit]") {
   const auto path = writeFile("map_degenerate.obj",
                               "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 0 0 1\n"
                               "f 1 2 3\nf 1 2 4\nf 1 2 5\nf 2 2 3\nf 2 4 3\n");
@@ -645,7 +645,7 @@ TEST_CASE("inputTriangle maps triangles back to the numbering of the warning lin
   CHECK(m.bytes() == m.positions.size() * 2 * sizeof(vec3) + 3 * sizeof(glm::uvec3) + 3 * sizeof(uint32_t));
 }
 
-TEST_CASE("a mesh far from the origin gets its own frame: same positions wherever it sits", "[mesh]") {
+TEST_CASE("a mesh far from the origin gets its own frame: same positions wherever it sits", "[mesh][unit]") {
   const auto path = writeFile("tent_far.obj", kTent);
   const Mesh base = loadMesh(path);
   for (const double d : {1e2, 1e4, 1e6}) {
@@ -678,7 +678,7 @@ TEST_CASE("a mesh far from the origin gets its own frame: same positions whereve
 }
 
 TEST_CASE("the frame's origin is the box centre in double: the same mesh authored anywhere gets the same positions",
-          "[mesh][translation]") {
+          "[mesh][translation][unit]") {
   // The tent at the origin, and written into its file at offsets that keep its
   // coordinates floats (non-powers of two; the second is far, the third not a float
   // grid point of the old power-of-two rule).
@@ -779,7 +779,7 @@ TEST_CASE("node hierarchies deeper than 1000 levels are refused before assimp re
                                                       "recursively)"));
 }
 
-TEST_CASE("every file a mesh pulls in must be a regular file: a FIFO is refused before it is opened", "[mesh][bad_input]") {
+TEST_CASE("every file a mesh pulls in must be a regular file: a FIFO is refused before it is opened", "[mesh][bad_input][unit]") {
   const auto dir = test::scratchDir("mesh");
   const std::string fifo = (dir / "pulled.fifo").string();
   if (!std::filesystem::exists(fifo)) REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
@@ -796,7 +796,7 @@ TEST_CASE("every file a mesh pulls in must be a regular file: a FIFO is refused 
 }
 
 TEST_CASE("GLB chunk lengths beyond the end of the file are refused before assimp allocates them",
-          "[mesh][bad_input]") {
+          "[mesh][bad_input][unit]") {
   // A JSON chunk claiming 0x7FFFFFF0 bytes made assimp allocate 2.2 GB (17 s) before it failed.
   std::string glb = quadGlb();
   const uint32_t lie = 0x7FFFFFF0;

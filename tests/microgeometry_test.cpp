@@ -31,7 +31,7 @@ DisplacedTriangle makeTriangle(vec2 t0, vec2 t1, vec2 t2) {
 
 }  // namespace
 
-TEST_CASE("micro-triangles tile T's uv triangle and lie on Eq. 1", "[microgeometry]") {
+TEST_CASE("micro-triangles tile T's uv triangle and lie on Eq. 1", "[microgeometry][unit]") {
   auto map = std::make_shared<const HeightMap>(proceduralHeightMap(37, 23, 5));
   const Displacement d{map, 0.2f, -0.5f, vec2(2.0f, 3.0f)};
   std::mt19937 rng(11);
@@ -59,7 +59,7 @@ TEST_CASE("micro-triangles tile T's uv triangle and lie on Eq. 1", "[microgeomet
   }
 }
 
-TEST_CASE("cells wholly inside T are two flat triangles on the grid", "[microgeometry]") {
+TEST_CASE("cells wholly inside T are two flat triangles on the grid", "[microgeometry][unit]") {
   auto map = std::make_shared<const HeightMap>(proceduralHeightMap(16, 16, 2));
   const Displacement d{map, 0.1f, 0.0f, vec2(1.0f)};
   const DisplacedTriangle T = makeTriangle(vec2(0.0f), vec2(1.0f, 0.0f), vec2(0.0f, 1.0f));
@@ -80,7 +80,7 @@ TEST_CASE("cells wholly inside T are two flat triangles on the grid", "[microgeo
 
 // Through the pre-tessellation, the traversal (canonical, and the driver with TFDM's
 // mipmap and quad-tree splits) and every exact baseline (tfdm, ...).
-TEST_CASE("a cell's least corner per edge decides as all four corners do", "[microgeometry]") {
+TEST_CASE("a cell's least corner per edge decides as all four corners do", "[microgeometry][unit]") {
   // MicroCells::interior tests one corner per edge (the computed σ·orient is monotone in
   // each coordinate): the same answer as testing the four corners, on every cell around
   // random triangles, with edges of every slope sign and of zero slope.

@@ -15,7 +15,7 @@ struct Ctx {
 };
 }  // namespace
 
-TEST_CASE("ParamSet reads typed values with defaults and rejects unused ones", "[params]") {
+TEST_CASE("ParamSet reads typed values with defaults and rejects unused ones", "[params][unit]") {
   ParamSet p(nlohmann::json{{"a", 3}, {"b", "x"}}, "s.json: strategies.range");
   CHECK(p.get<int>("a", 0) == 3);
   CHECK(p.get<int>("missing", 7) == 7);
@@ -28,7 +28,7 @@ TEST_CASE("ParamSet reads typed values with defaults and rejects unused ones", "
   REQUIRE_THROWS_AS(ParamSet(nlohmann::json::array(), "g.json"), Error);
 }
 
-TEST_CASE("Registry creates by name, and unknown names list the known ones", "[params]") {
+TEST_CASE("Registry creates by name, and unknown names list the known ones", "[params][unit]") {
   Registry<Thing, Ctx> reg;
   reg.add("plus", [](ParamSet& p, const Ctx& c) {
     auto t = std::make_unique<Thing>();

@@ -22,7 +22,7 @@ const EmbreeScene& defaultAccel() {
 }
 }  // namespace
 
-TEST_CASE("render: the same seed gives the same image with 1 or 2 threads", "[render]") {
+TEST_CASE("render: the same seed gives the same image with 1 or 2 threads", "[render][unit]") {
   const Scene s = defaultScene();
   for (Integrator integ : {Integrator::Primary, Integrator::AO, Integrator::Path}) {
     RenderOptions o;
@@ -45,7 +45,7 @@ TEST_CASE("render: the same seed gives the same image with 1 or 2 threads", "[re
   }
 }
 
-TEST_CASE("render: AOVs go to one multi-channel EXR, steps to a heat map", "[render]") {
+TEST_CASE("render: AOVs go to one multi-channel EXR, steps to a heat map", "[render][unit]") {
   const Scene s = defaultScene();
   RenderOptions o;
   o.size = {40, 30};
@@ -122,7 +122,7 @@ RenderResult renderNormals(const Scene& s, ShadingNormals n) {
 
 }  // namespace
 
-TEST_CASE("smooth normals: the bilinear height gradient matches finite differences", "[render][normals]") {
+TEST_CASE("smooth normals: the bilinear height gradient matches finite differences", "[render][normals][unit]") {
   std::vector<float> t(7 * 5);
   for (size_t i = 0; i < t.size(); ++i) t[i] = float((i * 37) % 11) / 10.0f;
   const Displacement d = mapOf(7, 5, t, -0.7f, vec2(3.0f, 2.0f));
@@ -142,7 +142,7 @@ TEST_CASE("smooth normals: the bilinear height gradient matches finite differenc
   }
 }
 
-TEST_CASE("smooth normals: a constant map gives the interpolated (Phong) normal", "[render][normals]") {
+TEST_CASE("smooth normals: a constant map gives the interpolated (Phong) normal", "[render][normals][unit]") {
   DisplacedTriangle T;
   T.p[0] = vec3(0, 0, 0), T.p[1] = vec3(1, 0, 0), T.p[2] = vec3(0, 1, 0);
   T.n[0] = glm::normalize(vec3(-0.5f, 0, 1)), T.n[1] = glm::normalize(vec3(0.5f, 0.3f, 1)), T.n[2] = vec3(0, 0, 1);
@@ -162,7 +162,7 @@ TEST_CASE("smooth normals: a constant map gives the interpolated (Phong) normal"
   CHECK(glm::length(r + glm::normalize(T.N(0.3f, 0.2f))) < 1e-5f);
 }
 
-TEST_CASE("smooth normals: exact on a flat triangle with an affine height, either winding", "[render][normals]") {
+TEST_CASE("smooth normals: exact on a flat triangle with an affine height, either winding", "[render][normals][unit]") {
   // Constant normals and a height affine in uv (a linear ramp, away from the map's
   // border): the displaced surface is a plane, whose normal Eq. 19 gives exactly.
   const int W = 8;
@@ -186,7 +186,7 @@ TEST_CASE("smooth normals: exact on a flat triangle with an affine height, eithe
     }
 }
 
-TEST_CASE("smooth normals agree with micro normals on planar surfaces, differ on bumpy ones", "[render][normals]") {
+TEST_CASE("smooth normals agree with micro normals on planar surfaces, differ on bumpy ones", "[render][normals][unit]") {
   const int W = 16;
   std::vector<float> ramp(W * W), bumps(W * W);
   for (int j = 0; j < W; ++j)

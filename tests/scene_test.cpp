@@ -59,7 +59,7 @@ bool near(const vec3& a, const vec3& b) { return glm::length(a - b) < 1e-5f; }
 
 }  // namespace
 
-TEST_CASE("a valid scene round trip", "[scene]") {
+TEST_CASE("a valid scene round trip", "[scene][unit]") {
   const fs::path dir = sceneDir();
   // The scene lives in sub/: every relative path is resolved against sub/, not the cwd.
   const std::string path = writeScene(dir / "sub" / "valid.json", kValid);
@@ -128,7 +128,7 @@ TEST_CASE("a valid scene round trip", "[scene]") {
   CHECK(s.stackDepth == 16);
 }
 
-TEST_CASE("a map used by several meshes is loaded once", "[scene]") {
+TEST_CASE("a map used by several meshes is loaded once", "[scene][unit]") {
   const fs::path dir = sceneDir();
   const Scene s = loadScene(writeScene(dir / "sub" / "shared.json", kValid));
   // "../map.png" and "../sub/../map.png" with flip_v: one map; without flip_v: another.
@@ -137,7 +137,7 @@ TEST_CASE("a map used by several meshes is loaded once", "[scene]") {
   CHECK(s.meshes[0].displacement->map.use_count() == 2);  // the two meshes; no cache keeps it
 }
 
-TEST_CASE("defaults: a scene with only a mesh", "[scene]") {
+TEST_CASE("defaults: a scene with only a mesh", "[scene][unit]") {
   const fs::path dir = sceneDir();
   const std::string path = writeScene(dir / "minimal.json", R"({"meshes": [{"file": "quad.obj"}]})");
   const Scene s = loadScene(path);
@@ -164,7 +164,7 @@ TEST_CASE("defaults: a scene with only a mesh", "[scene]") {
   CHECK(t.splitter.name == "midpoint2d");
 }
 
-TEST_CASE("strategies.lod \"cone\" and lod_bias: a lambda per ray, displacements at level 0", "[scene][lod]") {
+TEST_CASE("strategies.lod \"cone\" and lod_bias: a lambda per ray, displacements at level 0", "[scene][lod][unit]") {
   const fs::path dir = sceneDir();
   const Scene s = loadScene(writeScene(dir / "cone.json", R"({"meshes": [
     {"shape": {"type": "plane"}, "displacement": {"map": "map.png"}}],
@@ -176,7 +176,7 @@ TEST_CASE("strategies.lod \"cone\" and lod_bias: a lambda per ray, displacements
   CHECK(traversalConfigOf(s).lodPerRay);
 }
 
-TEST_CASE("procedural shapes stand in for mesh files", "[scene]") {
+TEST_CASE("procedural shapes stand in for mesh files", "[scene][unit]") {
   const fs::path dir = sceneDir();
   const Scene s = loadScene(writeScene(dir / "shapes.json", R"({"meshes": [
     {"shape": {"type": "plane", "size": [4, 2], "segments": [3, 2], "uv": [0.25, 0, 0.75, 2]},
@@ -207,7 +207,7 @@ TEST_CASE("procedural shapes stand in for mesh files", "[scene]") {
   CHECK(s.meshes[3].mesh.triangles.size() == 2);
 }
 
-TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
+TEST_CASE("bad scenes give errors naming the file and the key", "[scene][unit]") {
   const fs::path dir = sceneDir();
   const std::string mesh = R"("meshes": [{"file": "quad.obj"}])";
   const std::string disp = R"({"meshes": [{"file": "quad.obj", "displacement": {"map": "map.png", )";
@@ -384,7 +384,7 @@ TEST_CASE("bad scenes give errors naming the file and the key", "[scene]") {
   }
 }
 
-TEST_CASE("normals: \"smooth\" replaces the file's normals, \"file\" keeps them", "[scene]") {
+TEST_CASE("normals: \"smooth\" replaces the file's normals, \"file\" keeps them", "[scene][unit]") {
   const fs::path dir = sceneDir();
   // Two faces at a right angle, each with its own normal: split vertices on the edge.
   std::ofstream(dir / "fold.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
@@ -407,7 +407,7 @@ TEST_CASE("normals: \"smooth\" replaces the file's normals, \"file\" keeps them"
   }
 }
 
-TEST_CASE("a map with huge heights is refused naming the map, the scale and the limit", "[scene]") {
+TEST_CASE("a map with huge heights is refused naming the map, the scale and the limit", "[scene][unit]") {
   const fs::path dir = sceneDir();
   // A texel of 1e20: its spike overflowed the traversal's float products.
   test::writeGray((dir / "spike.tif").string(), 2, 2, {0, 0, 1e20f, 0}, OIIO::TypeDesc::FLOAT);
@@ -421,7 +421,7 @@ TEST_CASE("a map with huge heights is refused naming the map, the scale and the 
       dir / "tall.json", R"({"meshes": [{"file": "quad.obj", "displacement": {"map": "map.png", "scale": 1e12}}]})")));
 }
 
-TEST_CASE("missing scene file and non-finite numbers built in code", "[scene]") {
+TEST_CASE("missing scene file and non-finite numbers built in code", "[scene][unit]") {
   const fs::path dir = sceneDir();
   const std::string missing = (dir / "nope.json").string();
   CHECK_THROWS_MATCHES(loadScene(missing), Error, Catch::Matchers::Message(missing + ": file not found"));
@@ -466,8 +466,12 @@ TEST_CASE("every scene shipped in scenes/ loads with its meshes and maps", "[sce
       FAIL("scenes/data/jacksboro_fault_dem.png is missing: the build makes it (target scene_data, scripts/scene_data.sh)");
     if (name.rfind("paper/", 0) == 0 && !fs::exists(root / "data/paper"))
       FAIL("scenes/data/paper/ is missing: the build makes them (target scene_data, scripts/scene_data.sh)");
+    // The build's copy of a scene that names Debian's glmark2 data (tests/test_data.cmake):
+    // a test reads only what the build or the test makes.
+    const std::string file = test::shippedScene(name);
+    CHECK(test::slurp(file).find("/usr/share/") == std::string::npos);
     Scene s;
-    REQUIRE_NOTHROW(s = loadScene(entry.path().string()));
+    REQUIRE_NOTHROW(s = loadScene(file));
     CHECK(!s.lights.empty());
     for (const SceneMesh& sm : s.meshes) {
       CHECK(sm.mesh.skippedTriangles == 0);
@@ -494,7 +498,7 @@ TEST_CASE("every scene shipped in scenes/ loads with its meshes and maps", "[sce
   for (const auto& [name, e] : expected) CHECK(seen.count(name));
 }
 
-TEST_CASE("the sphere scene's map is zero on the polar caps (no cracks at the poles)", "[scene]") {
+TEST_CASE("the sphere scene's map is zero on the polar caps (no cracks at the poles)", "[scene][unit]") {
   const Scene s = loadScene(std::string(OBLONG_SOURCE_DIR) + "/scenes/sphere.json");
   const Displacement& d = *s.meshes[0].displacement;
   const Mesh& m = s.meshes[0].mesh;

@@ -9,7 +9,7 @@ using namespace oblong;
 
 OBLONG_STAT_COUNTER("test/Increments", statTestIncrements);
 
-TEST_CASE("statistics counters sum over threads, including finished ones", "[stats]") {
+TEST_CASE("statistics counters sum over threads, including finished ones", "[stats][unit]") {
 #if OBLONG_STATS
   Stats::reset();
   std::vector<std::thread> ts;

@@ -1,6 +1,8 @@
-// Shared helpers for the tests: a scratch directory (one per process, since CTest
-// runs test cases in parallel) and small image writers.
+// Shared helpers for the tests: scratch folders (tests/scratch.h), running the oblong
+// binary, and small image writers.
 #pragma once
+
+#include "tests/scratch.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -21,10 +23,11 @@
 
 namespace oblong::test {
 
-inline std::filesystem::path scratchDir(const std::string& name) {
-  auto p = std::filesystem::temp_directory_path() / ("oblong_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(p);
-  return p;
+// A shipped scene (a path under scenes/) as the tests load it: the build's copy
+// (tests/test_data.cmake) where the scene names Debian's glmark2 data, else scenes/'s own.
+inline std::string shippedScene(const std::string& rel) {
+  const std::filesystem::path copy = std::filesystem::path(OBLONG_TEST_DATA) / "scenes" / rel;
+  return std::filesystem::exists(copy) ? copy.string() : std::string(OBLONG_SOURCE_DIR) + "/scenes/" + rel;
 }
 
 inline std::string slurp(const std::filesystem::path& p) {

@@ -121,11 +121,11 @@ void runConformance(const std::vector<Scenario>& list, int count, bool verbose) 
 
 }  // namespace
 
-TEST_CASE("every strategy combination matches the brute force per triangle", "[traversal][conformance]") {
+TEST_CASE("every strategy combination matches the brute force per triangle", "[traversal][conformance][bruteforce]") {
   runConformance(scenarios(), 60, false);
 }
 
-TEST_CASE("every strategy combination matches the brute force on stiff cases", "[traversal][conformance]") {
+TEST_CASE("every strategy combination matches the brute force on stiff cases", "[traversal][conformance][bruteforce]") {
   runConformance(stiffScenarios(), 12, getenv("OBLONG_VERBOSE") != nullptr);
 }
 

@@ -28,7 +28,7 @@
 using namespace oblong;
 using namespace oblong::test;
 
-TEST_CASE("MicroCells gives forEachMicroTriangle's triangles bit for bit", "[traversal][microgeometry]") {
+TEST_CASE("MicroCells gives forEachMicroTriangle's triangles bit for bit", "[traversal][microgeometry][unit]") {
   for (const Scenario& s : {torus(), tiledQuad()}) {
     for (size_t k = 0; k < s.tris.size(); k += 7) {
       const DisplacedTriangle& T = s.tris[k];
@@ -112,7 +112,7 @@ TEST_CASE("prisms contain the micro-geometry and the shell analysis bounds bulge
   }
 }
 
-TEST_CASE("the ray's curve is monotone between the turning points", "[traversal][psi]") {
+TEST_CASE("the ray's curve is monotone between the turning points", "[traversal][psi][unit]") {
   const Newton inv;
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> U(0.0f, 1.0f);
@@ -181,7 +181,7 @@ TEST_CASE("the ray's curve is monotone between the turning points", "[traversal]
   CHECK(splits > 0);  // some rays do turn
 }
 
-TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "[traversal][prism]") {
+TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "[traversal][prism][unit]") {
   std::mt19937 rng(7);
   for (const Scenario& s : {coarseTorus(), sphere()}) {
     const float delta = maxCellDelta(*s.disp.map);

@@ -7,22 +7,26 @@
 # files end with one error line; oblong_vkbench needs no library but the Vulkan loader
 # and the C/C++ runtime.
 #
-#   bash tests/vkbench_test.sh OBLONG OBLONG_VKBENCH SOURCE_DIR      (CTest: label `vulkan`)
+#   bash tests/vkbench_test.sh OBLONG OBLONG_VKBENCH SOURCE_DIR TEST_DATA      (CTest: label `vulkan`)
+# TEST_DATA: the build's test_data/ (tests/test_data.cmake), whose scenes/ holds the
+# shipped scenes that name Debian's glmark2 data, pointed at the build's copy of it.
 set -euo pipefail
 
-OBLONG="$(realpath "${1:?usage: vkbench_test.sh OBLONG OBLONG_VKBENCH SOURCE_DIR}")"
+OBLONG="$(realpath "${1:?usage: vkbench_test.sh OBLONG OBLONG_VKBENCH SOURCE_DIR TEST_DATA}")"
 VKBENCH="$(realpath "${2:?}")"
 SRC="$(realpath "${3:?}")"
+DATA="$(realpath "${4:?}")"
+scene_file() { if [ -f "$DATA/scenes/$1.json" ]; then echo "$DATA/scenes/$1.json"; else echo "$SRC/scenes/$1.json"; fi; }
 SKIP=77
 # As tests/vulkan_test.cpp: lavapipe without LLVM's optimisation passes (same bits, the
-# pipeline compiles in seconds) into the tests' own shader cache.
+# pipeline compiles in seconds) into the tests' own shader cache (CTest's, or this run's).
 export GALLIVM_PERF="${GALLIVM_PERF:-nopt}"
-export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-${TMPDIR:-/tmp}/oblong_vulkan_test_shader_cache}"
 
 say() { echo "vkbench_test: $*"; }
 fail() { echo "vkbench_test: FAIL: $*" >&2; exit 1; }
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
+export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$TMP/shader_cache}"
 cd "$TMP"
 
 # Only the Vulkan loader and the C/C++ runtime.
@@ -48,7 +52,7 @@ expect_error() {
 }
 
 for scene in asteroid quad_tiled; do
-  "$OBLONG" bake "$SRC/scenes/$scene.json" -o "$scene.oblg" --size 40x30 >/dev/null
+  "$OBLONG" bake "$(scene_file "$scene")" -o "$scene.oblg" --size 40x30 >/dev/null
   rc=0
   "$VKBENCH" "$scene.oblg" --spp 2 --repeat 2 --out "$scene.json" --hits "$scene.vk.csv" --rays-out "$scene.rays.bin" \
     >out.txt 2>err.txt || rc=$?
@@ -59,7 +63,7 @@ for scene in asteroid quad_tiled; do
     fi
     fail "oblong_vkbench $scene: $(cat err.txt)"
   fi
-  "$OBLONG" trace "$SRC/scenes/$scene.json" --rays "$scene.rays.bin" --device vulkan -o "$scene.ref.csv" >/dev/null
+  "$OBLONG" trace "$(scene_file "$scene")" --rays "$scene.rays.bin" --device vulkan -o "$scene.ref.csv" >/dev/null
   cmp -s "$scene.vk.csv" "$scene.ref.csv" || fail "$scene: oblong_vkbench's hits differ from oblong trace --device vulkan's"
   sum="$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["hit_checksum"])' "$scene.json")"
   [ "$("$VKBENCH" --checksum "$scene.ref.csv")" = "$sum" ] || fail "$scene: hit checksum differs"
@@ -70,7 +74,7 @@ for scene in asteroid quad_tiled; do
 done
 
 # A baked ray list is traced as it is.
-"$OBLONG" bake "$SRC/scenes/asteroid.json" -o listed.oblg --rays asteroid.rays.bin >/dev/null
+"$OBLONG" bake "$(scene_file asteroid)" -o listed.oblg --rays asteroid.rays.bin >/dev/null
 "$VKBENCH" listed.oblg --repeat 1 --hits listed.csv >/dev/null 2>&1
 cmp -s listed.csv asteroid.ref.csv || fail "bake --rays: hits differ"
 say "bake --rays: same hits"
@@ -97,7 +101,7 @@ open(sys.argv[2], "wb").write(b)
 PY
 expect_error "truncated" "truncated" "$VKBENCH" truncated.oblg
 expect_error "truncated header" "truncated" "$VKBENCH" header.oblg
-expect_error "foreign" "not an oblong baked scene" "$VKBENCH" "$SRC/scenes/asteroid.json"
+expect_error "foreign" "not an oblong baked scene" "$VKBENCH" "$(scene_file asteroid)"
 expect_error "corrupt" "corrupt" "$VKBENCH" corrupt.oblg
 expect_error "missing" "cannot open" "$VKBENCH" missing.oblg
 say "PASS"

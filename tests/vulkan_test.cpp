@@ -49,20 +49,23 @@ using namespace oblong;
 
 namespace {
 
-std::string scenePath(const char* name) { return std::string(OBLONG_SOURCE_DIR) + "/scenes/" + name; }
+std::string scenePath(const char* name) { return test::shippedScene(name); }
 
 // Before the first Vulkan device of the process. lavapipe's LLVM optimisation of the
 // intersection shader takes ~35 s on a 2-core machine, longer than the tests' tracing,
 // and the results do not depend on it (same bits with and without, docs/vulkan.md):
 // the tests compile it without LLVM's optimisation passes (GALLIVM_PERF=nopt, ~7 s)
-// into a shader cache of their own, shared by the test processes and kept apart from
-// the user's optimised one. Variables already set are left alone. Then one device for
+// into a shader cache of their own, kept apart from the user's optimised one: CTest's
+// (one per test run, shared by its test processes: CMakeLists.txt), else one for this
+// process that goes with it. Variables already set are left alone. Then one device for
 // the rest of the process (vk::DeviceHold): the tests make dozens of small scenes, and
 // lavapipe compiles each pipeline in seconds, so they compile once.
 void vulkanTestEnv() {
   ::setenv("GALLIVM_PERF", "nopt", 0);
-  const std::string cache = (std::filesystem::temp_directory_path() / "oblong_vulkan_test_shader_cache").string();
-  ::setenv("MESA_SHADER_CACHE_DIR", cache.c_str(), 0);
+  if (!std::getenv("MESA_SHADER_CACHE_DIR")) {
+    static const test::ProcessScratch cache("vulkan_shader_cache");
+    ::setenv("MESA_SHADER_CACHE_DIR", cache.path.c_str(), 0);
+  }
   static const vk::DeviceHold device;
 }
 
@@ -636,7 +639,6 @@ TEST_CASE("vulkan: one triangle with a lambda per ray, the GPU runs the CPU's tr
 }
 
 TEST_CASE("vulkan: same hits as the CPU on the asteroid", "[vulkan]") {
-  REQUIRE(std::filesystem::exists("/usr/share/glmark2/models/asteroid-low.3ds"));  // scripts/setup.sh
   const Scene s = loadScene(scenePath("asteroid.json"));
   const Parity p = compare(s, testRays(s, {128, 96}, 8192, 1), "asteroid");
   CHECK(p.hits > 5000);
@@ -718,7 +720,6 @@ TEST_CASE("vulkan: same hits as the CPU with a lambda per ray", "[vulkan][lod]")
 
 TEST_CASE("vulkan: --lod cone renders as on the CPU", "[vulkan][lod]") {
   // The camera rays' λ from their cones (ConeLod, shared), kept by every ray of a path.
-  REQUIRE(std::filesystem::exists("/usr/share/glmark2/models/asteroid-low.3ds"));
   Scene s = loadScene(scenePath("asteroid.json"));
   setLodCone(s);
   s.lodBias = 1.0f;  // coarser: most camera rays above level 0
@@ -765,7 +766,6 @@ TEST_CASE("vulkan: parity at scale", "[.][vulkan_large]") {
 }
 
 TEST_CASE("vulkan: the asteroid renders as on the CPU", "[vulkan]") {
-  REQUIRE(std::filesystem::exists("/usr/share/glmark2/models/asteroid-low.3ds"));
   const Scene s = loadScene(scenePath("asteroid.json"));
   const EmbreeScene cpu(s, AccelOptions{});
   vulkanTestEnv();
@@ -843,8 +843,7 @@ Run runOblong(const std::string& args, const std::filesystem::path& dir) {
 
 TEST_CASE("vulkan: oblong trace --device vulkan writes the CPU's hits file", "[vulkan]") {
   vulkanTestEnv();  // inherited by the oblong processes
-  const auto dir = std::filesystem::temp_directory_path() / ("oblong_vulkan_cli_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const auto dir = test::scratchDir("vulkan_cli");
   const std::string scene = scenePath("quad_tiled.json");
   const Scene s = loadScene(scene);
   writeRays((dir / "rays.csv").string(), testRays(s, {48, 32}, 512, 3));
@@ -914,8 +913,7 @@ TEST_CASE("vulkan: a render in bands is the render in one band", "[vulkan]") {
 TEST_CASE("vulkan: Ctrl-C keeps what was rendered, a render beyond memory is refused, bake never truncates", "[vulkan][bad_input][cli]") {
   vulkanTestEnv();  // inherited by the oblong processes
   namespace fs = std::filesystem;
-  const auto dir = fs::temp_directory_path() / ("oblong_vulkan_bad_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const auto dir = test::scratchDir("vulkan_bad");
   const std::string D = dir.string() + "/", ob = std::string(OBLONG_BINARY);
   {
     // 1224x1224 pixels: the CPU's image buffers fit a 100 MB limit, the Vulkan path's
@@ -1132,7 +1130,6 @@ TEST_CASE("vulkan: tfdm on a plane tiled 1e3 and 1e4 times, step for step", "[vu
 }
 
 TEST_CASE("vulkan: same hits as the CPU's tfdm on the asteroid", "[vulkan][tfdm]") {
-  REQUIRE(std::filesystem::exists("/usr/share/glmark2/models/asteroid-low.3ds"));  // scripts/setup.sh
   const Scene s = loadScene(scenePath("asteroid.json"));
   AccelOptions ao;
   ao.traversal.baseline = "tfdm";

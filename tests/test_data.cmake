@@ -1,0 +1,47 @@
+# The tests' copy of the data they would otherwise read from Debian's glmark2-data (which
+# scripts/setup.sh installs): a test reads only what the build or the test makes.
+#   cmake -DSRC=SOURCE_DIR -DOUT=BUILD_DIR/test_data -DGLMARK2=/usr/share/glmark2 -P tests/test_data.cmake
+# OUT/glmark2/ gets the asteroid's models and height map; OUT/scenes/ gets every shipped
+# scene under scenes/ that names GLMARK2, with those paths pointing at the copy (such a
+# scene must name its other files by absolute path: the copy lives elsewhere). Files are
+# written only when their content changes, so the step is idempotent and cheap.
+cmake_minimum_required(VERSION 3.21)
+foreach(v SRC OUT GLMARK2)
+  if(NOT DEFINED ${v})
+    message(FATAL_ERROR "tests/test_data.cmake: -D${v}=... is required")
+  endif()
+endforeach()
+foreach(f models/asteroid-low.3ds models/asteroid-high.3ds textures/asteroid-height-map.png)
+  if(NOT EXISTS "${GLMARK2}/${f}")
+    message(FATAL_ERROR "tests/test_data.cmake: ${GLMARK2}/${f} is missing (Debian package glmark2-data; scripts/setup.sh installs it)")
+  endif()
+  get_filename_component(dir "${OUT}/glmark2/${f}" DIRECTORY)
+  file(MAKE_DIRECTORY "${dir}")
+  file(COPY_FILE "${GLMARK2}/${f}" "${OUT}/glmark2/${f}" ONLY_IF_DIFFERENT)
+endforeach()
+file(GLOB_RECURSE scenes RELATIVE "${SRC}/scenes" "${SRC}/scenes/*.json")
+set(written "")
+foreach(s ${scenes})
+  file(READ "${SRC}/scenes/${s}" text)
+  string(FIND "${text}" "${GLMARK2}/" at)
+  if(at EQUAL -1)
+    continue()
+  endif()
+  string(REPLACE "${GLMARK2}/" "${OUT}/glmark2/" text "${text}")
+  list(APPEND written "${s}")
+  set(dst "${OUT}/scenes/${s}")
+  set(old "")
+  if(EXISTS "${dst}")
+    file(READ "${dst}" old)
+  endif()
+  if(NOT old STREQUAL text)
+    file(WRITE "${dst}" "${text}")
+  endif()
+endforeach()
+# A copy whose scene no longer names GLMARK2 (or is gone) would be loaded in its stead.
+file(GLOB_RECURSE copies RELATIVE "${OUT}/scenes" "${OUT}/scenes/*.json")
+foreach(s ${copies})
+  if(NOT s IN_LIST written)
+    file(REMOVE "${OUT}/scenes/${s}")
+  endif()
+endforeach()
