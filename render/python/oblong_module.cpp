@@ -563,7 +563,7 @@ PYBIND11_MODULE(oblong, m) {
               backend = makeBackend(*scene, accel, device, &opts);
               warnBoxOnly(*scene, *backend);
               res = render(*scene, *backend, opts);
-              const RenderReport report{*scene, accel, *backend, opts, res, "", "", false, {}};  // no heat map
+              const RenderReport report{*scene, accel, *backend, opts, res, "", "", false, {}, {}};  // no heat map
               stats = renderStats(report, {OBLONG_VERSION, threads, s.loadSeconds,
                                            s.loadSeconds + secondsSince(start)});
             }
