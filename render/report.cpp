@@ -100,11 +100,12 @@ void printRenderSummary(const RenderReport& r) {
   for (const auto& m : mem) fmt::print("  memory   : {:<24} {}\n", m.name, humanBytes(m.bytes));
   fmt::print(
       "  summary  : {}x{} {} spp {}, {:.3f} s{}, {:.2f} Mrays/s ({} camera + {} secondary rays, {:.1f}% hit), "
-      "{:.1f} steps/camera ray, {:.1f} steps/ray, memory {}, peak {}\n",
+      "{:.1f} steps/camera ray, {:.1f} steps/ray, {:.1f} prisms/ray, memory {}, peak {}\n",
       o.size.x, o.size.y, o.spp, integratorName(o.integrator), res.seconds, res.tracingOnly ? " tracing" : "",
       mraysPerSecond(rays, res.seconds), res.primaryRays, res.secondaryRays,
       100.0 * double(res.hits) / double(std::max<int64_t>(1, res.primaryRays)), meanCameraSteps(res),
-      double(res.counters.steps()) / std::max(1.0, rays), humanBytes(totalBytes(mem)), humanBytes(peakMemoryBytes()));
+      double(res.counters.steps()) / std::max(1.0, rays), double(res.counters.prisms) / std::max(1.0, rays),
+      humanBytes(totalBytes(mem)), humanBytes(peakMemoryBytes()));
   if (res.partial)
     fmt::print("  partial  : interrupted; {} of {} pixels rendered (the rest is black)\n", res.pixelsDone,
                int64_t(o.size.x) * o.size.y);
