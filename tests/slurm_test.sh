@@ -142,6 +142,9 @@ done
 [ -n "$up" ] || fail "the Slurm node did not come up within 30 s (state '${st:-none}')"
 say "Slurm up on $HOST (ports $PCTLD, $PSLURMD) in $(( $(date +%s) - T0 )) s"
 
+# The build's copies of the scenes that read the asteroid (never /usr/share: the tests read
+# only what the build makes); Slurm's jobs inherit the environment.
+export OBLONG_SCENE_OVERRIDE="$BUILD/test_data/scenes"
 RUN_ALL=("$PY" "$ROOT/experiments/run_all" --quick --build "$BUILD" --only "$ONLY")
 
 # 1. The reference: the same subset run locally.

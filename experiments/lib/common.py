@@ -47,6 +47,10 @@ import runstore
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = ROOT / "experiments"
 SCENES = ROOT / "scenes"
+# A folder whose NAME.json replaces scenes/NAME.json where it exists: the tests point it at
+# the build's copies (build/test_data/scenes/), which read the asteroid from the build
+# instead of /usr/share.
+SCENE_OVERRIDE = Path(os.environ["OBLONG_SCENE_OVERRIDE"]) if os.environ.get("OBLONG_SCENE_OVERRIDE") else None
 
 # The two configurations every experiment is about (docs/traversal.md).
 CANONICAL = []  # the defaults: rmip (full resolution) + newton + midpoint2d, marching 4, inversion on
@@ -171,6 +175,8 @@ def load_scene(path: Path) -> dict:
 
 
 def scene_path(name: str) -> Path:
+    if SCENE_OVERRIDE is not None and (SCENE_OVERRIDE / f"{name}.json").is_file():
+        return SCENE_OVERRIDE / f"{name}.json"
     return SCENES / f"{name}.json"
 
 

@@ -129,10 +129,11 @@ class Store:
 
     def group_of(self, ctx, scene) -> str:
         p = Path(scene).resolve()
-        try:
-            return str(p.relative_to(self.C.SCENES.resolve()).with_suffix(""))
-        except ValueError:
-            pass
+        for folder in (self.C.SCENES, self.C.SCENE_OVERRIDE):
+            try:
+                return str(p.relative_to(folder.resolve()).with_suffix(""))
+            except (ValueError, AttributeError):
+                pass
         return ctx.variant_base.get(str(p), GENERATED)
 
     def base_key(self, ctx, sub: str, scene, args: list, threads: int) -> str:
