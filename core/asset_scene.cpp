@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -394,6 +395,10 @@ double gltfNumber(const std::string& path, const json& obj, const char* k, doubl
   if (!obj.contains(k)) return def;
   if (!obj[k].is_number() || !std::isfinite(obj[k].get<double>()))
     fail(path, "{}.{}: must be a finite number, got {}", key, k, shown(obj[k]));
+  // Heights are floats: a double beyond their range would become infinite unannounced.
+  if (std::abs(obj[k].get<double>()) > double(std::numeric_limits<float>::max()))
+    fail(path, "{}.{}: {} is beyond a float's range (|x| <= {:g})", key, k, shown(obj[k]),
+         double(std::numeric_limits<float>::max()));
   return obj[k].get<double>();
 }
 
@@ -471,7 +476,9 @@ Material fromGltfMaterial(const std::string& path, const json& doc, size_t index
       }
       const json& image = element(path, doc, "images", texture["source"], texKey + ".source");
       const std::string iKey = fmt::format("images[{}]", texture["source"].get<size_t>());
-      if (!image.is_object() || !image.contains("uri") || !image["uri"].is_string())
+      if (image.is_object() && image.contains("uri") && !image["uri"].is_string())
+        fail(path, "{}.uri: must be a file name (a string), got {}", iKey, shown(image["uri"]));
+      if (!image.is_object() || !image.contains("uri"))
         fail(path, "{}: an image inside the file (bufferView) is not supported: store the map as an image file "
              "next to it and give its uri", iKey);
       const std::string uri = image["uri"].get<std::string>();
@@ -484,6 +491,9 @@ Material fromGltfMaterial(const std::string& path, const json& doc, size_t index
       // height = factor · H + offset = factor · (H + offset / factor)
       r.scale = factor;
       r.bias = offset / factor;
+      if (!std::isfinite(float(offset / factor)))
+        fail(path, "{}: displacementGeometryOffset / displacementGeometryFactor = {:g} is beyond a float's range",
+             dkey, offset / factor);
       r.scaleWhere = path + ": " + dkey + ".displacementGeometryFactor";
       r.biasWhere = path + ": " + dkey + ".displacementGeometryOffset";
       r.tilingWhere = path + ": " + dkey;

@@ -267,6 +267,22 @@ TEST_CASE("bad mesh-file input gives one error line naming the file", "[assets][
   embedded["images"][0] = {{"bufferView", 0}, {"mimeType", "image/png"}};
   oneError(runOblongCli("info " + write("embedded.glb", glbOf(embedded))),
            {"embedded.glb: images[0]: an image inside the file (bufferView) is not supported"});
+  // A uri that is not a string is named as such (it was reported as a bufferView image).
+  nlohmann::json numberUri = embedded;
+  numberUri["images"][0] = {{"uri", 5}};
+  oneError(runOblongCli("info " + write("uri5.glb", glbOf(numberUri))),
+           {"uri5.glb: images[0].uri: must be a file name (a string), got 5"});
+  // An offset beyond a float's range (it became infinite and was reported as 'got null').
+  nlohmann::json farOffset = embedded;
+  farOffset["images"][0] = {{"uri", "height.png"}};
+  auto& khr = farOffset["materials"][0]["extensions"]["KHR_materials_displacement"];
+  khr["displacementGeometryOffset"] = 1e300;
+  oneError(runOblongCli("info " + write("offset.glb", glbOf(farOffset))),
+           {"offset.glb: ", "displacementGeometryOffset: 1e+300 is beyond a float's range"});
+  khr["displacementGeometryOffset"] = 1e38;
+  khr["displacementGeometryFactor"] = 1e-30;
+  oneError(runOblongCli("info " + write("ratio.glb", glbOf(farOffset))),
+           {"ratio.glb: ", "displacementGeometryOffset / displacementGeometryFactor = 1e+68 is beyond a float's range"});
 
   nlohmann::json red = quadGltf({{"pbrMetallicRoughness", {{"baseColorFactor", {2, 0, 0, 1}}}}}, "");
   oneError(runOblongCli("info " + write("red.glb", glbOf(red))),
