@@ -291,6 +291,13 @@ TEST_CASE("bad mesh-file input gives one error line naming the file", "[assets][
   write("huge.mtl", "newmtl m\ndisp -s 1e300 1 height.png\n");
   oneError(runOblongCli("info " + write("huge.obj", quadObj("huge.mtl", "m"))),
            {"huge.mtl: line 2: disp -s [0]: must be a finite number"});
+  // Below a float's smallest normal: it became 0 and read "must not be zero" or "got [0, 1]".
+  write("tiny.mtl", "newmtl m\ndisp -mm 0 1e-300 height.png\n");
+  oneError(runOblongCli("info " + write("tiny.obj", quadObj("tiny.mtl", "m"))),
+           {"tiny.mtl: line 2: disp -mm: 1e-300 is too small for a float: give 0 or a magnitude of at least"});
+  write("tinys.mtl", "newmtl m\ndisp -s 1e-300 1 height.png\n");
+  oneError(runOblongCli("info " + write("tinys.obj", quadObj("tinys.mtl", "m"))),
+           {"tinys.mtl: line 2: disp -s [0]: 1e-300 is too small for a float"});
 
   const std::string bare = write("bare2.obj", quadObj("", ""));
   oneError(runOblongCli("info " + bare + " --scale 2"), {"--scale: ", "bare2.obj has no displacement map"});
