@@ -491,7 +491,7 @@ Material fromGltfMaterial(const std::string& path, const json& doc, size_t index
       // height = factor · H + offset = factor · (H + offset / factor)
       r.scale = factor;
       r.bias = offset / factor;
-      if (!std::isfinite(float(offset / factor)))
+      if (std::abs(offset / factor) > double(std::numeric_limits<float>::max()))
         fail(path, "{}: displacementGeometryOffset / displacementGeometryFactor = {:g} is beyond a float's range",
              dkey, offset / factor);
       r.scaleWhere = path + ": " + dkey + ".displacementGeometryFactor";
