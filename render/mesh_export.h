@@ -2,10 +2,12 @@
 // so that other renderers and tools can load it.
 //
 // The triangles are the pre-tessellation baseline's (`--baseline tessellated`,
-// render/embree_scene.cpp), in the same order and with the same float positions: per
+// render/embree_scene.cpp), in the same order: per
 // displaced mesh, the micro-triangles forEachMicroTriangle emits for each base triangle
 // (the oracle's, core/microgeometry.h), at the scene's level of detail; per plain mesh,
-// its triangles. Positions are in world coordinates as Embree traces them (worldFloat);
+// its triangles. Positions are in world coordinates, each micro-vertex rounded once from
+// the mesh's frame, where the baseline traces it (worldFloat; ExportMerged counts what
+// that rounding merges far from the origin);
 // uvs are each micro-triangle's own (the baseline shares a vertex by position within a
 // base triangle and keeps the uv of its first occurrence, which may be an ulp apart).
 // No vertex is shared: triangle k is vertices 3k, 3k+1, 3k+2, so that the file is
