@@ -286,6 +286,52 @@ void userIntersect(const void* argsPtr) {
   }
 }
 
+// A pre-tessellated mesh's one primitive: the box of its micro-triangles, into the world
+// and padded for Embree's box test as the prisms are.
+void frameBounds(const RTCBoundsFunctionArguments* args) {
+  const auto* fs = static_cast<const EmbreeFrameScene*>(args->geometryUserPtr);
+  BoxD w{dvec3(fs->bounds.lo) + fs->origin, dvec3(fs->bounds.hi) + fs->origin};
+  w.pad(framePad(fs->bounds, fs->origin));
+  const AABB b = w.toFloatOutward();
+  RTCBounds* o = args->bounds_o;
+  o->lower_x = b.lo.x, o->lower_y = b.lo.y, o->lower_z = b.lo.z;
+  o->upper_x = b.hi.x, o->upper_y = b.hi.y, o->upper_z = b.hi.z;
+}
+
+// The ray moved into the mesh's frame (toFrame, as for the traversal) and traced through
+// its micro-triangles; a hit keeps the micro-triangle's primID and barycentrics, which
+// EmbreeScene::intersect reads as for any triangle geometry.
+template <bool Occluded>
+void frameIntersect(const void* argsPtr) {
+  using Args = std::conditional_t<Occluded, RTCOccludedFunctionNArguments, RTCIntersectFunctionNArguments>;
+  const Args* args = static_cast<const Args*>(argsPtr);
+  if (!args->valid[0]) return;
+  const auto* fs = static_cast<const EmbreeFrameScene*>(args->geometryUserPtr);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  if constexpr (Occluded) {
+    RTCRay* ray = reinterpret_cast<RTCRay*>(args->ray);
+    const Ray r = toFrame(
+        Ray{vec3(ray->org_x, ray->org_y, ray->org_z), vec3(ray->dir_x, ray->dir_y, ray->dir_z), ray->tnear, ray->tfar},
+        fs->origin);
+    RTCRay local = toRayHit(r).ray;
+    rtcOccluded1(fs->scene, &ctx, &local);
+    if (local.tfar < 0.0f) ray->tfar = -kInfinity;
+  } else {
+    RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
+    const Ray r = toFrame(Ray{vec3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z),
+                              vec3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z), rh->ray.tnear, rh->ray.tfar},
+                          fs->origin);
+    RTCRayHit local = toRayHit(r);
+    rtcIntersect1(fs->scene, &ctx, &local);
+    if (local.hit.geomID == RTC_INVALID_GEOMETRY_ID || !(local.ray.tfar < rh->ray.tfar)) return;
+    rh->ray.tfar = local.ray.tfar;
+    rh->hit = local.hit;
+    rh->hit.geomID = args->geomID;
+    rh->hit.instID[0] = args->context->instID[0];
+  }
+}
+
 }  // namespace
 
 TessellationEstimate estimateTessellation(const Mesh& mesh, const Displacement& d) {
@@ -388,6 +434,8 @@ EmbreeScene::EmbreeScene(const Scene& scene, const AccelOptions& opts)
 
 void EmbreeScene::release() {
   if (scene_) rtcReleaseScene(scene_);
+  for (auto& g : geoms_)
+    if (g && g->frame.scene) rtcReleaseScene(g->frame.scene), g->frame.scene = nullptr;
   cone_.reset();
   if (device_) rtcReleaseDevice(device_);
   scene_ = nullptr;
@@ -485,8 +533,8 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
       for (size_t ti = 0; ti < patches.size(); ++ti) {
         const uint32_t base = uint32_t(g->vertices.size());
         Patch& p = patches[ti];
-        // Built in the mesh's frame, traced by Embree in the world (rounded once).
-        for (const vec4& v : p.vertices) g->vertices.emplace_back(worldFloat(mesh, vec3(v)), 0.0f);
+        // In the mesh's frame, as built (frameIntersect moves the rays into it).
+        g->vertices.insert(g->vertices.end(), p.vertices.begin(), p.vertices.end());
         g->uvs.insert(g->uvs.end(), p.uvs.begin(), p.uvs.end());
         for (const auto& t : p.indices) g->indices.push_back(t + base);
         g->basePrim.insert(g->basePrim.end(), p.indices.size(), uint32_t(ti));
@@ -502,6 +550,25 @@ void EmbreeScene::build(const Scene& scene, const AccelOptions& opts) {
     rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, g->indices.data(), 0,
                                sizeof(glm::uvec3), g->indices.size());
     rtcCommitGeometry(geom);
+    if (!g->basePrim.empty()) {
+      // Micro-triangles: a scene of their own in the mesh's frame, traced through a
+      // one-primitive user geometry of the world's scene (frameIntersect).
+      EmbreeFrameScene& fs = g->frame;
+      fs.scene = rtcNewScene(device_);
+      rtcSetSceneFlags(fs.scene, RTC_SCENE_FLAG_ROBUST);
+      rtcAttachGeometry(fs.scene, geom);
+      rtcReleaseGeometry(geom);
+      rtcCommitScene(fs.scene);
+      fs.origin = mesh.origin;
+      for (size_t v = 0; v + 1 < g->vertices.size(); ++v) fs.bounds.extend(vec3(g->vertices[v]));
+      geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
+      rtcSetGeometryUserPrimitiveCount(geom, 1);
+      rtcSetGeometryUserData(geom, &fs);
+      rtcSetGeometryBoundsFunction(geom, frameBounds, nullptr);
+      rtcSetGeometryIntersectFunction(geom, [](const RTCIntersectFunctionNArguments* a) { frameIntersect<false>(a); });
+      rtcSetGeometryOccludedFunction(geom, [](const RTCOccludedFunctionNArguments* a) { frameIntersect<true>(a); });
+      rtcCommitGeometry(geom);
+    }
     const unsigned id = rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
     if (geoms_.size() <= id) geoms_.resize(id + 1);

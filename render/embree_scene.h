@@ -66,8 +66,9 @@ TessellationEstimate estimateTessellation(const Mesh& mesh, const Displacement& 
 // The micro-triangles the pre-tessellation baseline builds for each triangle of the mesh
 // (forEachMicroTriangle's, counted without building them; 0 for a skipped triangle).
 std::vector<size_t> microTriangleCounts(const Mesh& mesh, const Displacement& d);
-// A point of a mesh's frame where Embree traces it: origin + p summed in double, rounded
-// once to float (plain meshes' vertices and the pre-tessellated micro-triangles alike).
+// A point of a mesh's frame in world floats: origin + p summed in double, rounded once
+// (plain meshes' vertices as Embree traces them, and `oblong export`'s positions; the
+// pre-tessellated micro-triangles are traced in the mesh's frame instead).
 inline vec3 worldFloat(const Mesh& mesh, const vec3& p) { return vec3(mesh.origin + dvec3(p)); }
 // Bytes held at the peak of building these meshes' tessellations and their BVH
 // (patches with their vertex tables, the concatenated buffers, Embree's build).
@@ -78,6 +79,16 @@ size_t tessellationPeakBytes(const std::vector<TessellationEstimate>& meshes, si
 struct EmbreeUserGeometry {
   const Intersector* intersector = nullptr;
   dvec3 origin{0.0};
+};
+
+// A pre-tessellated mesh: its micro-triangles in the mesh's frame (as the traversal and
+// the brute force see them), in an Embree scene of their own that a one-primitive user
+// geometry traces with the ray moved into the frame as the traversal moves it. In world
+// floats the micro-vertices of a mesh far from the origin would round together.
+struct EmbreeFrameScene {
+  RTCScene scene = nullptr;
+  dvec3 origin{0.0};
+  AABB bounds;  // of the micro-triangles, in the frame
 };
 
 // The CPU's trace backend (render/trace_backend.h): batches are traced in parallel
@@ -143,6 +154,7 @@ class EmbreeScene : public TraceBackend {
     std::vector<uint32_t> basePrim;   // micro-triangle -> base triangle (displaced only)
     std::unique_ptr<Intersector> intersector;  // displaced meshes as user geometry
     EmbreeUserGeometry user;  // what its callbacks get
+    EmbreeFrameScene frame;  // pre-tessellated meshes
   };
   void build(const Scene& scene, const AccelOptions& opts);
   void release();

@@ -96,8 +96,15 @@ void putVertex(float* out, const vec3& p, const vec2& uv) {
   out[0] = p.x, out[1] = p.y, out[2] = p.z, out[3] = uv.x, out[4] = uv.y;
 }
 
-void putMicro(float* out, const Mesh& mesh, const MicroTriangle& m) {
-  for (int k = 0; k < 3; ++k) putVertex(out + 5 * k, worldFloat(mesh, m.v[k].p), m.v[k].uv);
+// Returns whether the float world positions merged two vertices distinct in the frame.
+bool putMicro(float* out, const Mesh& mesh, const MicroTriangle& m) {
+  vec3 w[3];
+  for (int k = 0; k < 3; ++k) putVertex(out + 5 * k, w[k] = worldFloat(mesh, m.v[k].p), m.v[k].uv);
+  for (int k = 0; k < 3; ++k) {
+    const int l = (k + 1) % 3;
+    if (w[k] == w[l] && m.v[k].p != m.v[l].p) return true;
+  }
+  return false;
 }
 
 struct Interrupted {};
@@ -107,8 +114,9 @@ void checkInterrupt(const std::atomic<bool>* interrupt) {
 }
 
 // The micro-triangles of one displaced mesh, base triangle by base triangle.
-void writeDisplaced(Writer& w, const SceneMesh& sm, const ExportPlan::Part& part, const std::string& where,
-                    const std::atomic<bool>* interrupt) {
+size_t writeDisplaced(Writer& w, const SceneMesh& sm, const ExportPlan::Part& part, const std::string& where,
+                      const std::atomic<bool>* interrupt) {
+  std::atomic<size_t> merged{0};
   const Mesh& mesh = sm.mesh;
   const Displacement& d = *sm.displacement;
   const std::vector<size_t>& counts = part.perTriangle;
@@ -124,7 +132,7 @@ void writeDisplaced(Writer& w, const SceneMesh& sm, const ExportPlan::Part& part
       float rec[15];
       forEachMicroTriangle(mesh.triangle(a), d, [&](const MicroTriangle& m) {
         if ((n & (kChunkTriangles - 1)) == 0) checkInterrupt(interrupt);
-        putMicro(rec, mesh, m);
+        if (putMicro(rec, mesh, m)) merged.fetch_add(1, std::memory_order_relaxed);
         w.put(rec, sizeof rec);
         ++n;
       });
@@ -142,7 +150,7 @@ void writeDisplaced(Writer& w, const SceneMesh& sm, const ExportPlan::Part& part
       float* out = chunk.data() + offset[ti - a] * 15;
       size_t& n = got[ti - a];
       forEachMicroTriangle(mesh.triangle(ti), d, [&](const MicroTriangle& m) {
-        if (n < counts[ti]) putMicro(out + 15 * n, mesh, m);
+        if (n < counts[ti] && putMicro(out + 15 * n, mesh, m)) merged.fetch_add(1, std::memory_order_relaxed);
         ++n;
       });
     });
@@ -151,6 +159,7 @@ void writeDisplaced(Writer& w, const SceneMesh& sm, const ExportPlan::Part& part
     w.put(chunk.data(), chunk.size() * sizeof(float));
     a = b;
   }
+  return merged.load();
 }
 
 void writePlain(Writer& w, const Mesh& mesh) {
@@ -258,18 +267,39 @@ void checkExportFits(const Scene& scene, const ExportPlan& plan, const std::stri
               what);
 }
 
+std::string exportMergedWarning(const std::string& path, const ExportPlan& plan, const ExportMerged& merged) {
+  if (merged.triangles == 0) return "";
+  return fmt::format(
+      "warning: {}: float world positions merge vertices of {} of {} micro-triangles (meshes[{}] reaches {:.3g}, "
+      "where floats are {:g} apart): the file is coarser than the surface oblong traces in the mesh's frame; move "
+      "the scene nearer the origin to export it",
+      path, merged.triangles, plan.microTriangles, merged.mesh, merged.farthest, merged.spacing);
+}
+
 bool writeExport(const Scene& scene, const ExportPlan& plan, const std::string& path,
-                 const std::atomic<bool>* interrupt) {
+                 const std::atomic<bool>* interrupt, ExportMerged* merged) {
+  ExportMerged found;
   try {
     writeOutput(path, [&](const std::string& tmp) {
+      found = ExportMerged{};
       Writer w(tmp, path);
       const std::string header = exportHeader(scene, plan);
       w.put(header.data(), header.size());
       for (const ExportPlan::Part& p : plan.parts) {
         const SceneMesh& sm = scene.meshes[size_t(p.mesh)];
-        if (p.displaced)
-          writeDisplaced(w, sm, p, fmt::format("{}: meshes[{}]", scene.path, p.mesh), interrupt);
-        else
+        if (p.displaced) {
+          const size_t n = writeDisplaced(w, sm, p, fmt::format("{}: meshes[{}]", scene.path, p.mesh), interrupt);
+          if (n > 0 && found.triangles == 0) {
+            found.mesh = p.mesh;
+            for (size_t v = 0; v < sm.mesh.positions.size(); ++v) {
+              const dvec3 x = glm::abs(sm.mesh.world(v));
+              found.farthest = std::max({found.farthest, x.x, x.y, x.z});
+            }
+            const float f = float(found.farthest);
+            found.spacing = double(std::nextafter(f, kInfinity)) - double(f);
+          }
+          found.triangles += n;
+        } else
           writePlain(w, sm.mesh);
       }
       // Triangle k is vertices 3k, 3k+1, 3k+2.
@@ -286,6 +316,7 @@ bool writeExport(const Scene& scene, const ExportPlan& plan, const std::string& 
   } catch (const Interrupted&) {
     return false;
   }
+  if (merged) *merged = found;
   return true;
 }
 

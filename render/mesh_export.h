@@ -2,10 +2,12 @@
 // so that other renderers and tools can load it.
 //
 // The triangles are the pre-tessellation baseline's (`--baseline tessellated`,
-// render/embree_scene.cpp), in the same order and with the same float positions: per
+// render/embree_scene.cpp), in the same order: per
 // displaced mesh, the micro-triangles forEachMicroTriangle emits for each base triangle
 // (the oracle's, core/microgeometry.h), at the scene's level of detail; per plain mesh,
-// its triangles. Positions are in world coordinates as Embree traces them (worldFloat);
+// its triangles. Positions are in world coordinates, each micro-vertex rounded once from
+// the mesh's frame, where the baseline traces it (worldFloat; ExportMerged counts what
+// that rounding merges far from the origin);
 // uvs are each micro-triangle's own (the baseline shares a vertex by position within a
 // base triangle and keeps the uv of its first occurrence, which may be an ulp apart).
 // No vertex is shared: triangle k is vertices 3k, 3k+1, 3k+2, so that the file is
@@ -53,10 +55,23 @@ std::string exportHeader(const Scene& scene, const ExportPlan& plan);
 // copy, than memory may hold). The message says what it needs and what would fit.
 void checkExportFits(const Scene& scene, const ExportPlan& plan, const std::string& path);
 
+// Micro-triangles whose vertices are distinct in their mesh's frame but not as the
+// file's float world positions (counted while writing): a mesh far from the origin for
+// the size of its texels, where floats are coarser than the micro-geometry.
+struct ExportMerged {
+  size_t triangles = 0;   // in all
+  int mesh = -1;          // the first mesh that has any
+  double spacing = 0.0;   // the float spacing at that mesh's farthest coordinate
+  double farthest = 0.0;  // and that coordinate's magnitude
+};
+// The one warning line for `merged` (empty when nothing merged), without "oblong: ".
+std::string exportMergedWarning(const std::string& path, const ExportPlan& plan, const ExportMerged& merged);
+
 // Writes the export to `path` (render/output.h: never a truncated file under that name;
 // a write error is one oblong::Error line naming `path`). Returns false, having written
-// nothing, when `interrupt` was set before it finished.
+// nothing, when `interrupt` was set before it finished. `merged`, when given, gets the
+// micro-triangles the float positions merged.
 bool writeExport(const Scene& scene, const ExportPlan& plan, const std::string& path,
-                 const std::atomic<bool>* interrupt = nullptr);
+                 const std::atomic<bool>* interrupt = nullptr, ExportMerged* merged = nullptr);
 
 }  // namespace oblong

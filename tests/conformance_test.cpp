@@ -634,6 +634,64 @@ TEST_CASE("translation: a strip authored at an offset traces as at the origin, b
   }
 }
 
+// The pre-tessellated baseline far from the origin: a plane 6 wide under a 256² map
+// (texels 0.023 wide) at 1e5, where floats are 0.0078 apart, and at 1e9, where they are 64
+// apart. Its micro-triangles are traced in the mesh's frame as the traversal and the brute
+// force trace theirs (in world floats they had t off by 1.1e-3 relative at 1e5 and merged
+// vertices at 1e9). The rays start on the float grid at both placements (offsets of 64 from
+// the plane's centre), so each placement traces the same rays in the frame; none is far
+// enough to be moved to the scene (render/far_rays.h).
+TEST_CASE("tessellated: a plane at 1e5 and 1e9 from the origin gives the brute force's hits", "[conformance][tessellated][bruteforce][translation][unit]") {
+  Scene s;
+  s.path = "<plane far from the origin>";
+  SceneMesh q;
+  q.mesh = quadMesh(3.0f, 0.0f, 8);
+  auto map = std::make_shared<const HeightMap>(proceduralHeightMap(256, 256, 11));
+  q.displacement = Displacement{map, 0.1f, -0.5f, vec2(1.0f)};
+  s.meshes.push_back(std::move(q));
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<float> U(-1.0f, 1.0f);
+  std::vector<dvec3> from, to;  // in the plane's frame
+  for (int i = 0; i < 400; ++i) {
+    const dvec3 target(2.9 * U(rng), 0.05 * U(rng), 2.9 * U(rng));
+    if (i % 2 == 0)  // steep, from above
+      from.push_back(dvec3(64.0 * std::round(U(rng)), 64.0, 64.0 * std::round(U(rng))));
+    else  // grazing, from the side at the base plane's height
+      from.push_back(i % 4 == 1 ? dvec3(-64.0, 0.0, 0.0) : dvec3(0.0, 0.0, 64.0));
+    to.push_back(target);
+  }
+  AccelOptions bf;
+  bf.traversal.baseline = "bruteforce";
+  const float diag = glm::length(sceneBounds(s).extent());
+  std::vector<Hit> atOrigin;
+  for (const double shift : {0.0, 1e5, 1e9}) {
+    const Scene far = translated(s, dvec3(shift));
+    const EmbreeScene tess(far, AccelOptions::withBaseline("tessellated")), brute(far, bf);
+    std::vector<Ray> rays;
+    for (size_t i = 0; i < from.size(); ++i) {
+      Ray r;
+      r.o = vec3(from[i] + dvec3(shift));
+      REQUIRE(dvec3(r.o) == from[i] + dvec3(shift));  // on the float grid
+      r.d = vec3(glm::normalize(to[i] - from[i]));
+      rays.push_back(r);
+    }
+    const std::vector<Hit> t = traceAll(tess, rays), b = traceAll(brute, rays);
+    size_t hits = 0;
+    for (const Hit& h : t) hits += h.valid();
+    INFO("shift " << shift << ": " << hits << " of " << rays.size() << " rays hit");
+    CHECK(hits > rays.size() / 2);
+    const Mismatch m = compare(t, b, rays, diag, /*vsEmbree=*/true);
+    INFO("tessellated vs bruteforce: " << m.first);
+    CHECK(m.count == 0);
+    // The same rays in the frame: the same micro-triangles, the same hits bit for bit.
+    if (shift == 0.0) atOrigin = t;
+    size_t same = 0;
+    for (size_t i = 0; i < t.size(); ++i)
+      same += t[i].valid() == atOrigin[i].valid() && (!t[i].valid() || (t[i].t == atOrigin[i].t && t[i].prim == atOrigin[i].prim));
+    CHECK(same == t.size());
+  }
+}
+
 TEST_CASE("grazing rays: canonical takes fewer steps than the driver with mipmap and quad-tree", "[conformance][grazing][minmax_mipmap][quadtree]") {
   // bench_traversal's grazing family (0.5-6 degrees off the base surface). Step counts
   // are deterministic; measured 2026-12-02: sphere (8 % relief) 17.2 against 42.2 steps

@@ -2,6 +2,7 @@
 // baseline's triangles with its float vertices, so that the file's triangles trace
 // exactly as `--baseline tessellated` on the original scene, also loaded back through a
 // scene file; the uv differences that remain are checked against their causes.
+#include "core/asset_scene.h"
 #include "core/error.h"
 #include "core/microgeometry.h"
 #include "core/scene.h"
@@ -10,11 +11,13 @@
 #include "test_util.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <algorithm>
 #include <array>
 #include <map>
 #include <random>
@@ -188,7 +191,28 @@ Scene reimport(const Scene& scene, const fs::path& dir, const std::string& name)
 
 }  // namespace
 
-TEST_CASE("export: the exported triangles trace as --baseline tessellated, bit for bit", "[export][tessellated][unit]") {
+// The baseline traces its micro-triangles in each mesh's frame; the file holds them in
+// world floats, each vertex rounded once. Same hit or miss, mesh and t within the
+// conformance tests' tolerance against Embree (1e-5 relative, divided by the hit's |cos|).
+Agreement compareNear(const EmbreeScene& a, const EmbreeScene& b, const std::vector<Ray>& rays, float diag) {
+  Agreement g;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const Hit x = a.intersect(rays[i]), y = b.intersect(rays[i]);
+    ++g.rays;
+    g.hits += x.valid();
+    bool ok = x.valid() == y.valid();
+    if (ok && x.valid()) {
+      const float tol = 1e-5f * std::max(std::abs(x.t), 1e-2f * diag) /
+                        std::max(std::abs(glm::dot(x.ng, glm::normalize(rays[i].d))), 1e-3f);
+      ok = std::abs(x.t - y.t) <= tol && x.mesh == y.mesh;
+    }
+    if (!ok && g.differ++ == 0)
+      g.first = fmt::format("ray {}: t {:.9g} vs {:.9g}, mesh {} vs {}", i, x.t, y.t, x.mesh, y.mesh);
+  }
+  return g;
+}
+
+TEST_CASE("export: the exported triangles are the baseline's in world floats and load back bit for bit", "[export][tessellated][unit]") {
   const fs::path dir = test::scratchDir("export_reimport");
   Scene scene = loadScene(writeScene(dir));
   const std::vector<Ray> rays = raysAround(20000);
@@ -205,19 +229,41 @@ TEST_CASE("export: the exported triangles trace as --baseline tessellated, bit f
     const Scene back = reimport(scene, dir, name);
     const std::vector<float> v = exportedVertices(dir / (name + ".ply"));
     REQUIRE(v.size() == 15 * plan.triangles);
+    // Each micro-vertex is the oracle's, its frame's origin added in double and rounded once.
+    size_t rec = 0, notWorld = 0;
+    for (const ExportPlan::Part& part : plan.parts) {
+      const SceneMesh& sm = scene.meshes[size_t(part.mesh)];
+      if (!part.displaced) {
+        rec += part.triangles;
+        continue;
+      }
+      for (size_t ti = 0; ti < sm.mesh.triangles.size(); ++ti)
+        forEachMicroTriangle(sm.mesh.triangle(ti), *sm.displacement, [&](const MicroTriangle& m) {
+          for (int c = 0; c < 3; ++c) {
+            const float* e = &v[15 * rec + 5 * size_t(c)];
+            notWorld += !sameBits(worldFloat(sm.mesh, m.v[c].p), vec3(e[0], e[1], e[2]));
+          }
+          ++rec;
+        });
+    }
+    CHECK(notWorld == 0);
 
     // The file's records with the baseline's shared uvs, one geometry per mesh as in the
-    // scene: every hit the baseline's, bit for bit (t, uv, normal).
+    // scene: every hit the baseline's, t within the rounding to world floats.
     size_t shared = 0;
     const std::vector<float> tessUV = withSharedUVs(scene, plan, v, shared);
-    const Agreement records = compare(tess, EmbreeScene(sceneOfRecords(tessUV, plan, true), AccelOptions{}), rays);
-    INFO(records.first);
-    CHECK(records.hits > rays.size() / 3);
-    CHECK(records.differ == 0);
+    const EmbreeScene records(sceneOfRecords(tessUV, plan, true), AccelOptions{});
+    const float diag = glm::length(vec3(3.5f));
+    const Agreement near = compareNear(tess, records, rays, diag);
+    INFO(near.first);
+    CHECK(near.hits > rays.size() / 3);
+    // A ray grazing a silhouette within that rounding (2.4e-7 here) may hit on one side
+    // only: 1 of the 20 000 at λ = 1.5, none at full resolution.
+    CHECK(near.differ <= 2);
     // The file's own uvs, all in one geometry: hits on a triangle whose uvs the sharing
     // changed differ in uv by about an ulp, nothing else does.
-    const Agreement own =
-        compare(tess, EmbreeScene(sceneOfRecords(v, plan, false), AccelOptions{}), rays, uvsDiffer(v, tessUV));
+    const Agreement own = compare(records, EmbreeScene(sceneOfRecords(v, plan, false), AccelOptions{}), rays,
+                                  uvsDiffer(v, tessUV));
     INFO(own.first);
     INFO(fmt::format("{} of {} vertex uvs shared by the baseline; {} of {} hits differ in uv through them", shared,
                      3 * plan.triangles, own.flaggedUV, own.hits));
@@ -228,7 +274,7 @@ TEST_CASE("export: the exported triangles trace as --baseline tessellated, bit f
     // this scene), and joins vertices (assimp's JoinIdenticalVertices) that share a
     // position and whose uvs differ by less than its tolerance (1e-5): a vertex whose uv
     // two micro-triangles computed an ulp apart gets one of them, as in the baseline but
-    // not always the same one.
+    // not always the same one. So it traces as the records, bit for bit.
     REQUIRE(back.meshes.size() == 1);
     const Mesh& m = back.meshes[0].mesh;
     CHECK(m.triangles.size() + m.skippedTriangles == plan.triangles);
@@ -242,10 +288,10 @@ TEST_CASE("export: the exported triangles trace as --baseline tessellated, bit f
         joined[k] |= !sameBits(m.uvs[i], vec2(e[3], e[4]));
       }
     CHECK(moved == 0);
-    const Agreement loaded = compare(tess, EmbreeScene(back, AccelOptions{}), rays, joined);
+    const Agreement loaded = compare(records, EmbreeScene(back, AccelOptions{}), rays, joined);
     INFO(loaded.first);
     INFO(fmt::format("loaded back: {} of {} hits differ in uv through joined vertices", loaded.flaggedUV, loaded.hits));
-    CHECK(loaded.hits == records.hits);
+    CHECK(loaded.hits == near.hits);
     CHECK(loaded.differ == 0);
   }
 }
@@ -279,5 +325,160 @@ TEST_CASE("export: counts, header and refusals", "[export][unit]") {
     CHECK(m.find("uint32 indices") != std::string::npos);
     CHECK(m.find("try --lod ") != std::string::npos);
     CHECK(m.find('\n') == std::string::npos);
+  }
+}
+
+namespace {
+
+// A 256² map with detail in both directions (8-bit levels are enough here).
+void writeDetailMap(const fs::path& png, int w, int h) {
+  std::vector<float> v(size_t(w) * size_t(h));
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i)
+      v[size_t(j * w + i)] = 0.5f + 0.25f * std::sin(0.7f * float(i)) + 0.2f * std::cos(0.45f * float(j));
+  test::writeGray(png.string(), w, h, v, OIIO::TypeDesc::UINT8);
+}
+
+// The depth AOV of a render (inf where the camera ray missed).
+std::vector<float> depthOf(const fs::path& exr) {
+  auto in = OIIO::ImageInput::open(exr.string());
+  REQUIRE(in);
+  const OIIO::ImageSpec spec = in->spec();
+  const int z = spec.channelindex("Z");
+  REQUIRE(z >= 0);
+  std::vector<float> all(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+  REQUIRE(in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()));
+  std::vector<float> out(size_t(spec.width) * size_t(spec.height));
+  for (size_t p = 0; p < out.size(); ++p) out[p] = all[p * size_t(spec.nchannels) + size_t(z)];
+  return out;
+}
+
+}  // namespace
+
+// Far from the origin float world positions (the file's) are coarser than the
+// micro-geometry, which oblong computes in the mesh's frame: a plane 6 wide under a 256²
+// map (texels 0.023 wide) at 1e9, where floats are 64 apart, had 2 418 identical vertices
+// and no word about it. The export counts the micro-triangles whose distinct vertices the
+// floats merge and the command prints one warning line; at the origin nothing merges.
+TEST_CASE("export: a plane far from the origin keeps its vertices distinct or warns that floats merge them", "[export][bad_input][unit]") {
+  const fs::path dir = test::scratchDir("export_far");
+  writeDetailMap(dir / "map.png", 256, 256);
+  for (const double shift : {0.0, 1e5, 1e9}) {
+    INFO("shift " << shift);
+    const std::string name = fmt::format("far{:g}", shift);
+    const fs::path json = dir / (name + ".json");
+    std::ofstream(json) << fmt::format(
+        R"({{"meshes": [{{"shape": {{"type": "plane", "size": 6, "segments": [8, 8]}},
+             "transform": {{"translate": [{0}, {0}, {0}]}},
+             "displacement": {{"map": "map.png", "scale": 0.1, "bias": -0.5}}}}]}})",
+        shift);
+    const Scene scene = loadScene(json.string());
+    const ExportPlan plan = planExport(scene);
+    const fs::path ply = dir / (name + ".ply");
+    ExportMerged merged;
+    REQUIRE(writeExport(scene, plan, ply.string(), nullptr, &merged));
+    // The count is the file's: micro-triangles with two equal float vertices that are
+    // distinct in the mesh's frame.
+    const std::vector<float> v = exportedVertices(ply);
+    REQUIRE(v.size() == 15 * plan.triangles);
+    size_t inFile = 0, k = 0;
+    const SceneMesh& sm = scene.meshes[0];
+    for (size_t ti = 0; ti < sm.mesh.triangles.size(); ++ti)
+      forEachMicroTriangle(sm.mesh.triangle(ti), *sm.displacement, [&](const MicroTriangle& m) {
+        bool merges = false;
+        for (int c = 0; c < 3; ++c) {
+          const int d = (c + 1) % 3;
+          const float* a = &v[15 * k + 5 * size_t(c)];
+          const float* b = &v[15 * k + 5 * size_t(d)];
+          merges |= a[0] == b[0] && a[1] == b[1] && a[2] == b[2] && m.v[c].p != m.v[d].p;
+        }
+        inFile += merges;
+        ++k;
+      });
+    CHECK(k == plan.triangles);
+    CHECK(merged.triangles == inFile);
+    if (shift == 0.0) CHECK(merged.triangles == 0);
+    if (shift == 1e9) CHECK(merged.triangles > 1000);
+    // The command: one warning line exactly when something merged, exit 0.
+    const test::CliRun r = test::runOblongCli("export " + json.string() + " -o " + (dir / (name + "_cli.ply")).string());
+    INFO(r.err);
+    CHECK(r.status == 0);
+    if (merged.triangles == 0) {
+      CHECK(r.err.empty());
+    } else {
+      CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+      CHECK(r.err.rfind("oblong: warning: " + (dir / (name + "_cli.ply")).string() + ": float world positions merge "
+                        "vertices of " + std::to_string(merged.triangles) + " of " + std::to_string(plan.microTriangles),
+                        0) == 0);
+    }
+  }
+}
+
+// `oblong export` of an OBJ grid (8×8 quads over [-1, 1]², an MTL `disp` map of 32²)
+// loads back and renders as the scene it came from. With a square map every base
+// diagonal lies on the texel cells' diagonals, and a grid line passes through every
+// vertex of the grid: the half-cells touching a base edge only along it left polygons of
+// zero area whose vertices at T's corners were computed twice, an ulp apart, so their fans
+// were slivers of opposite winding on both sides of the edge; a vertex used only by two
+// of them got a zero normal, and `oblong render out.ply` failed (exit 1). Both diagonal
+// directions, each rendered at 40×30 from the mesh file's camera: every pixel's depth the
+// same within 1e-5 relative.
+TEST_CASE("export: an OBJ grid with an MTL disp map loads back and renders as the scene", "[export][cli][bad_input]") {
+  const fs::path dir = test::scratchDir("export_grid");
+  writeDetailMap(dir / "height.png", 32, 32);
+  std::ofstream(dir / "plane.mtl") << "newmtl m\ndisp -mm 0 0.1 height.png\n";
+  for (const bool flipped : {false, true}) {
+    INFO("diagonals " << (flipped ? "(i+1,j)-(i,j+1)" : "(i,j)-(i+1,j+1)"));
+    const int n = 8;
+    std::string obj = "mtllib plane.mtl\n";
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+        obj += fmt::format("v {} {} 0\nvt {} {}\n", -1.0 + 2.0 * i / n, -1.0 + 2.0 * j / n, double(i) / n, double(j) / n);
+    obj += "vn 0 0 1\nusemtl m\n";
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+        const auto f = [&](int x, int y, int z) { obj += fmt::format("f {0}/{0}/1 {1}/{1}/1 {2}/{2}/1\n", x, y, z); };
+        if (flipped) f(a, b, d), f(b, c, d);
+        else f(a, b, c), f(a, c, d);
+      }
+    const std::string tag = flipped ? "flipped" : "plain";
+    const fs::path objPath = dir / (tag + ".obj"), ply = dir / (tag + ".ply");
+    std::ofstream(objPath) << obj;
+    const test::CliRun e = test::runOblongCli("export " + objPath.string() + " -o " + ply.string());
+    INFO(e.err);
+    REQUIRE(e.status == 0);
+    // The export as a scene seen by the mesh file's own camera.
+    nlohmann::json scene = assetSceneJson(objPath.string());
+    scene["meshes"][0].erase("displacement");
+    scene["meshes"][0]["file"] = ply.string();
+    const Camera cam = loadAsset(objPath.string()).camera;
+    const auto arr = [](const vec3& x) { return nlohmann::json::array({x.x, x.y, x.z}); };
+    scene["camera"] = {{"from", arr(cam.from)}, {"to", arr(cam.to)}, {"up", arr(cam.up)}, {"fov", cam.fovY}};
+    const fs::path back = dir / (tag + "_back.json");
+    std::ofstream(back) << scene.dump();
+    const std::string common = " --size 40x30 --integrator primary -q";
+    const test::CliRun a = test::runOblongCli("render " + objPath.string() + common + " -o " +
+                                              (dir / (tag + "_a.png")).string() + " --aovs " +
+                                              (dir / (tag + "_a.exr")).string());
+    INFO(a.err);
+    REQUIRE(a.status == 0);
+    const test::CliRun b = test::runOblongCli("render " + back.string() + common + " -o " +
+                                              (dir / (tag + "_b.png")).string() + " --aovs " +
+                                              (dir / (tag + "_b.exr")).string());
+    INFO(b.err);
+    REQUIRE(b.status == 0);
+    // At most the loader's one line about the zero-area micro-triangles it skipped.
+    CHECK(std::count(b.err.begin(), b.err.end(), '\n') <= 1);
+    const std::vector<float> za = depthOf(dir / (tag + "_a.exr")), zb = depthOf(dir / (tag + "_b.exr"));
+    REQUIRE(za.size() == zb.size());
+    size_t hits = 0, differ = 0;
+    for (size_t p = 0; p < za.size(); ++p) {
+      const bool ha = std::isfinite(za[p]), hb = std::isfinite(zb[p]);
+      hits += ha;
+      differ += ha != hb || (ha && std::abs(za[p] - zb[p]) > 1e-5f * za[p]);
+    }
+    CHECK(hits > za.size() / 8);
+    CHECK(differ == 0);
   }
 }

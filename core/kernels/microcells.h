@@ -313,20 +313,27 @@ OBLONG_INLINE float mcLineHeight(McHeights hs, int type, int c, OBLONG_IN(dvec2)
   return r;
 }
 
+// Vertex k of T: its own position and unit normal, the height at its uv.
+OBLONG_TEMPLATE1(McHeights)
+OBLONG_INLINE McVertex mcTVertex(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeights hs, int k) {
+  float h = mcMicroAt(hs, E.S[k]);
+  McVertex r;
+  OBLONG_PRECISE vec3 p = T.p[k] + h * T.n[k];  // n[k] is unit
+  r.p = p;
+  r.uv = T.t[k];
+  return r;
+}
+
 // The world point of polygon vertex v. Grid points exactly on an edge of T are computed
 // from that edge alone; only edges the cell is clipped against (mask) can pass through
-// one (for the others sigma·orient is positive at every corner of the cell).
+// one (for the others sigma·orient is positive at every corner of the cell). A point at
+// an end of its edge is T's vertex there, computed as that vertex: a grid line through a
+// vertex of T also makes a crossing there, and computed along the edge (another height
+// and normalisation) it came out an ulp apart, so that the degenerate polygon a half-cell
+// leaves along an edge fanned into slivers of non-zero area (whose normals cancel).
 OBLONG_TEMPLATE1(McHeights)
 OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeights hs, OBLONG_IN(McPV) v, int mask) {
-  if (v.kind == OBLONG_MC_TVERTEX) {
-    int k = v.a;
-    float h = mcMicroAt(hs, E.S[k]);
-    McVertex r;
-    OBLONG_PRECISE vec3 p = T.p[k] + h * T.n[k];  // n[k] is unit
-    r.p = p;
-    r.uv = T.t[k];
-    return r;
-  }
+  if (v.kind == OBLONG_MC_TVERTEX) return mcTVertex(T, E, hs, v.a);
   int edge = -1;
   double t = 0.0;
   float raw = 0.0f;
@@ -349,6 +356,8 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
       }
     if (edge < 0) return mcGridVertex(hs, v.a, v.b);
   }
+  if (t == 0.0) return mcTVertex(T, E, hs, E.A[edge]);
+  if (t == 1.0) return mcTVertex(T, E, hs, E.B[edge]);
   return mcOnEdge(T, E, edge, t, raw);
 }
 

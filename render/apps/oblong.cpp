@@ -317,10 +317,12 @@ int runExport(const std::string& scenePath, const std::string& out, const std::s
   flags.applyLod(scene, "an export holds one surface");
   const ExportPlan plan = planExport(scene);
   checkExportFits(scene, plan, out);
-  if (!writeExport(scene, plan, out, &gInterrupted)) {
+  ExportMerged merged;
+  if (!writeExport(scene, plan, out, &gInterrupted, &merged)) {
     eprint("oblong: interrupted: nothing written\n");
     return kInterruptedStatus;
   }
+  if (const std::string w = exportMergedWarning(out, plan, merged); !w.empty()) eprint("oblong: {}\n", w);
   // The levels the meshes are at (each map's own, clamped to its last level).
   std::string levels;
   if (scene.lod) {
