@@ -7,6 +7,8 @@
 // being smeared over all three (TFDM's boxes, Thonat et al. 2021 §4; docs/traversal.md).
 #pragma once
 
+#include "core/kernels/ray_patch.h"
+
 #include "core/microgeometry.h"
 #include "core/kernels/constants.h"
 #include "core/kernels/lang.h"
@@ -34,9 +36,9 @@ struct TextureFrame {
   }
   // The pad of a box in this frame, for a pad `worldPad` of the world's axes (an error
   // bounded per world coordinate is bounded by √3 times that along any unit axis) and
-  // the rounding of the rotation of points of max-norm up to `mag`. The shaders pad with
-  // the same expression (traversal.glsl).
-  static double pad(double worldPad, double mag) { return 1.75 * worldPad + OBLONG_TRAV_OBB_ROUND * (mag + 1); }
+  // the rounding of the rotation of points of max-norm up to `mag` (the kernel, shared
+  // with the shaders).
+  static double pad(double worldPad, double mag) { return shared::texFramePad(worldPad, mag); }
 };
 
 }  // namespace oblong

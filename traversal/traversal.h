@@ -93,8 +93,8 @@ class Traversal final : public TraversalIntersectorBase {
     const RQ& rq = static_cast<const RQ&>(*rq_);
     const Inv& inv = static_cast<const Inv&>(*inv_);
     const Split& split = static_cast<const Split&>(*split_);
-    RayPatch<RQ, Inv> patch(mesh_, prim, rq, inv, opt_, r, rc, local);
-    const bool found = patch.run(split);
+    RayPatch<RQ, Inv, Split> patch(mesh_, prim, rq, inv, split, opt_, r, rc);
+    const bool found = patch.run(local);
     if (found) patch.hit().fill(hit);
     flushCounters(local, found, c);
     return found;

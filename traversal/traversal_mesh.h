@@ -3,6 +3,8 @@
 // padded for the watertight micro-triangle test's rounding, and the cheap per-ray reject.
 #pragma once
 
+#include "core/kernels/ray_patch.h"
+
 #include "core/microgeometry.h"
 #include "traversal/intersector.h"
 #include "core/kernels/constants.h"
@@ -71,10 +73,10 @@ struct RayMargins {
   double rayErr, boxPad, extraB, extraS;
   static RayMargins make(const PrismParams& P, double maxP, double maxO) {
     RayMargins m;
-    m.rayErr = OBLONG_TRAV_RAY_ERR * (maxP + maxO + std::abs(P.a) + std::abs(P.b));
+    m.rayErr = shared::rayError(maxP, maxO, P.a, P.b);
     m.boxPad = P.vertexErr + m.rayErr;
-    m.extraB = (P.kb.x + P.kb.y) * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
-    m.extraS = P.ks * OBLONG_TRAV_RAY_ERR_FACTOR * m.rayErr;
+    m.extraB = shared::rayExtraB(P.kb, m.rayErr);
+    m.extraS = shared::rayExtraS(P.ks, m.rayErr);
     return m;
   }
   Prism prism(const LocalFrame& F, const PrismParams& P) const {

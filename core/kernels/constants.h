@@ -1,7 +1,6 @@
 // The traversal's and the inverter's numerical constants, defined once for the CPU
-// (traversal/ray_patch.h, traversal/traversal_mesh.h, the kernels of core/kernels/)
-// and the Vulkan shaders (render/vulkan/shaders/traversal.glsl, which mirrors RayPatch's
-// driver loop line by line). This header is
+// and the Vulkan shaders: the driver (core/kernels/ray_patch.h), traversal/traversal_mesh.h
+// and the other kernels of core/kernels/. This header is
 // both C++ and GLSL: plain #defines with literal values, nothing else. Change a value
 // here and both sides change; a literal changed on one side only is caught by the
 // CPU/GPU contract test ("[vulkan]", tests/vulkan_test.cpp: same hits and the same
@@ -21,9 +20,9 @@
 #ifndef OBLONG_TRAVERSAL_CONSTANTS_H
 #define OBLONG_TRAVERSAL_CONSTANTS_H
 
-// ---- RayPatch and TraversalMesh (traversal/ray_patch.h, traversal_mesh.h) ----------
+// ---- the driver and TraversalMesh (core/kernels/ray_patch.h, traversal_mesh.h) ------
 
-// Entries of the per-ray, per-prism stack of pieces / box ranges (RayPatch::kStack). A push
+// Entries of the per-ray, per-prism stack of pieces / box ranges (the driver's g_st). A push
 // that would overflow marches (or tests the cells of) the current piece instead: correct,
 // just not hierarchical. Fixed-size so that RayPatch allocates nothing. OBLONG_TRAV_STACK
 // is the CPU's array and the largest `stack_depth` a scene may ask for; the default uses
@@ -50,14 +49,14 @@
 #define OBLONG_TRAV_RAY_ERR 1e-6
 
 // rayErr enters the inflation of the prism (kb·, ks·) and the cell dilation ε (kxy·) twice
-// (RayMargins::make extraB / extraS, RayPatch eps_): both ends of a ray point's error.
+// (rayExtraB / rayExtraS, rpInit's ε): both ends of a ray point's error.
 #define OBLONG_TRAV_RAY_ERR_FACTOR 2
 
 // Absolute slack of ray parameters, in units of the box pad along the ray (tAbs =
 // this · boxPad / |D|): float hit distances against double interval ends.
 #define OBLONG_TRAV_T_ABS_PADS 8
 
-// Relative slack of ray parameters (RayPatch::slack(t) = this · |t| + tAbs): intervals are
+// Relative slack of ray parameters (slack(t) = this · |t| + tAbs): intervals are
 // compared with float hit distances and float tmin / tmax.
 #define OBLONG_TRAV_SLACK_REL 1e-5
 
@@ -87,7 +86,7 @@
 // and the snapping of rectangles and marched rows to cells (this · (1 + |lo| + |hi|)).
 #define OBLONG_TRAV_SNAP_ETA 1e-9
 
-// Cell indices are clamped to ±this before the conversion to int (RayPatch::snap).
+// Cell indices are clamped to ±this before the conversion to int (snapCells).
 #define OBLONG_TRAV_SNAP_LIMIT 1e9
 
 // minorAt: an end point of the marched piece counts for a column line c when |c − uv| <=
@@ -107,7 +106,7 @@
 #define OBLONG_TRAV_MIN_GAIN 1e-3
 #define OBLONG_TRAV_MIN_GAIN_CELLS 0.5
 
-// Curve points claimed without an inversion (RayPatch::pointBetween) are kept only when
+// Curve points claimed without an inversion (pointBetween) are kept only when
 // their pad (texels, both axes together) is at most this; else the point is inverted.
 #define OBLONG_TRAV_CLAIM_PAD 0.05
 
@@ -117,7 +116,7 @@
 
 // Where ε exceeds this fraction of the marching scale (float rounding at a fine texel),
 // pieces up to OBLONG_TRAV_WIDE_LEAF_EPS ε (samples) are leaves, subdivided as boxes down
-// to blocks of OBLONG_TRAV_WIDE_BOX_CELLS cells per axis (RayPatch::leaf). Chosen on the
+// to blocks of OBLONG_TRAV_WIDE_BOX_CELLS cells per axis (leafPiece). Chosen on the
 // roof at 100² tiling (ε above a texel on many pieces): 342 steps per camera ray with marched leaves, 147
 // with these (tfdm: 188).
 #define OBLONG_TRAV_WIDE_EPS_REL 0.25

@@ -81,7 +81,7 @@ struct CountersGpu {
 struct TriGpu {
   // LocalFrame: P = Pc + PX X + PY Y, N = Nc + NX X + NY Y over local sample coordinates.
   dvec3 Pc, PX, PY, Nc, NX, NY;
-  dvec3 N13;                // F.N(1/3, 1/3) (RayPatch::dirLocal)
+  dvec3 N13;                // F.N(1/3, 1/3) (the driver's dirLocal)
   dvec3 p0d, e1, e2, n0d, f1, f2;  // F.P(b) = p0 + e1 u + e2 v, F.N(b) = n0 + f1 u + f2 v
   dvec3 boxLo, boxHi;       // exact prism box, unpadded (Prism::exact(T, a, b).bounds())
   dvec3 boxPadLo, boxPadHi; // TraversalMesh::prismBoxes (padded for origins within budget)

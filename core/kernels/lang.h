@@ -44,6 +44,8 @@ using glm::dvec3;
 using glm::ivec2;
 using glm::vec2;
 using glm::vec3;
+using glm::ivec4;
+using glm::bvec2;
 using uint = unsigned int;
 // Scalars: non-templates, so that they win over glm's templates, which serve vectors.
 inline double min(double a, double b) { return b < a ? b : a; }
@@ -54,6 +56,7 @@ inline int clamp(int x, int lo, int hi) { return x < lo ? lo : (hi < x ? hi : x)
 inline double abs(double x) { return std::abs(x); }
 inline double clamp(double x, double lo, double hi) { return x < lo ? lo : (hi < x ? hi : x); }
 inline double sqrt(double x) { return std::sqrt(x); }
+inline double floor(double x) { return std::floor(x); }
 using glm::abs;
 using glm::max;
 using glm::min;

@@ -55,7 +55,7 @@ bool runTfdm() {
   precise double maxO = max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z));
   // TextureFrame::pad(boxPad, maxO + maxAbsVertex(T) + |a| + |b|).
   precise double mag = maxO + TRI.maxP + abs(TRI.a) + abs(TRI.b);
-  precise double boxPad = 1.75 * g_boxPad + OBLONG_TRAV_OBB_ROUND * (mag + 1.0);
+  double boxPad = texFramePad(g_boxPad, mag);
   g_tAbs = double(OBLONG_TRAV_T_ABS_PADS) * boxPad / lengthD(g_D);  // tfdm's t slack: from the frame's pad
   double mMin = double(TRI.minNormalLength);
   double sigma = tfdmSigma(TRI.S[0], TRI.S[1], TRI.S[2]);
@@ -84,7 +84,7 @@ bool runTfdm() {
       continue;
     ++g_boxes;
     ++g_rangeQueries;
-    vec2 h = toHeight(tfNode(n.z, n.x, n.y));
+    vec2 h = rpToHeight(tfNode(n.z, n.x, n.y));
     dvec2 lo = max(dvec2(double(clo.x - TRI.origin.x), double(clo.y - TRI.origin.y)), TRI.sbLo);
     dvec2 hi = min(dvec2(double(chi.x + 1 - TRI.origin.x), double(chi.y + 1 - TRI.origin.y)), TRI.sbHi);
     dvec3 blo, bhi;

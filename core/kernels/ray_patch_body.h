@@ -1,0 +1,617 @@
+// The driver of the RMIP traversal: its state and its loop (core/kernels/ray_patch.h says
+// what it does, where this is included and which hooks the includer supplies). No include
+// guard and no namespace: in C++ this is the body of shared::RayPatchLoop, in GLSL the
+// global scope of the intersection shader.
+//
+// The `g_` variables are the state of one ray against one triangle: C++ members, GLSL
+// globals. Each large step has one call site (the cells to test come from one generator,
+// nextCell, tested at one place in rpLoop; the inversions of a piece share one call):
+// GLSL inlines every call, and the inlined size is what the shader compiler pays for.
+
+// ---- the state ------------------------------------------------------------------------
+// Set by the includer before rpInit: the triangle and the ray.
+PatchFrame g_F;        // the triangle's frame (core/kernels/patch_math.h)
+dvec3 g_N13;           // its normal at the centroid, frameN(g_F, (1/3, 1/3))
+ClaimBounds g_claim;   // its bounds on the claims' errors
+bool g_wellPosed;      // the shell analysis vouches for the curve machinery
+float g_tmin, g_tmax;  // the ray's [tmin, tmax] (float, as Ray)
+dvec3 g_O, g_D, g_invD;
+dvec3 g_boxLo, g_boxHi;  // the exact prism's world box, padded (box-only subdivision)
+dvec3 g_Ot, g_invDt;     // the ray in the texture frame
+dvec3 g_texLo, g_texHi;  // the exact prism's box in the texture frame, padded
+ivec2 g_cellLo, g_cellHi;  // the triangle's cells, local sample coordinates
+dvec2 g_sbLo, g_sbHi;      // the triangle's uv box, local sample coordinates
+ivec2 g_origin;            // the absolute sample index of local (0, 0)
+float g_marchingScale;
+int g_stackDepth;              // entries used of the stack
+bool g_inversionInTraversal;   // Fig. 5a
+// Set by rpInit.
+double g_boxPad, g_tAbs;  // the ray's pad of the per-step boxes; slack for float t
+double g_texPad;          // g_boxPad in the texture frame
+dvec2 g_eps;              // ε: cells within it of the curve are marched
+bool g_wideEps;           // ε wide against the marching scale: leaves are boxes
+double g_leafScale;       // pieces up to this many texels are leaves
+Psi g_psi;                // the ray's implicit curve in texture space (Eq. 3)
+dvec2 g_dvd;              // approximate curve direction (front-to-back order)
+// The work done (RayCounters).
+int g_boxes, g_rangeQueries, g_inversions, g_cells, g_microTris;
+bool g_boxOnly;
+// The stack.
+RpEntry g_st[OBLONG_RP_STACK];
+int g_sp;
+
+// The per-ray margins, from the triangle's magnitudes (maxP: its largest vertex
+// coordinate; [a, b]: its heights; vertexErr: its vertices' rounding), the ray's origin
+// magnitude maxO and direction length lenD; resets the work counters.
+void rpInit(double maxP, double maxO, double a, double b, double vertexErr, OBLONG_IN(dvec2) eps,
+            OBLONG_IN(dvec2) kxy, double lenD) {
+  double rayErr = rayError(maxP, maxO, a, b);
+  OBLONG_PRECISE double boxPad = vertexErr + rayErr;
+  g_boxPad = boxPad;
+  OBLONG_PRECISE double tAbs = double(OBLONG_TRAV_T_ABS_PADS) * g_boxPad / lenD;
+  g_tAbs = tAbs;
+  g_texPad = texFramePad(g_boxPad, maxO + maxP + (abs(a) + abs(b)));
+  OBLONG_PRECISE dvec2 e = eps + kxy * (double(OBLONG_TRAV_RAY_ERR_FACTOR) * rayErr);
+  g_eps = e;
+  double maxDil = max(g_eps.x, g_eps.y);
+  g_wideEps = maxDil > OBLONG_TRAV_WIDE_EPS_REL * double(g_marchingScale);
+  g_leafScale = g_wideEps ? max(double(g_marchingScale), OBLONG_TRAV_WIDE_LEAF_EPS * maxDil) : double(g_marchingScale);
+  g_dvd = dvec2(1.0);
+  g_boxes = 0;
+  g_rangeQueries = 0;
+  g_inversions = 0;
+  g_cells = 0;
+  g_microTris = 0;
+  g_boxOnly = false;
+  g_sp = 0;
+}
+
+// ---- small steps -------------------------------------------------------------------------
+double slack(double t) { return OBLONG_TRAV_SLACK_REL * abs(t) + g_tAbs; }
+double bestLimit() {
+  return OBLONG_HOOK(rpHitFound)() ? double(OBLONG_HOOK(rpHitT)()) + slack(double(OBLONG_HOOK(rpHitT)()))
+                                   : double(g_tmax) + slack(double(g_tmax));
+}
+dvec2 dirLocal() { return approxDirLocal(g_F, g_N13, g_D); }
+
+// A curve point from prism coordinates (b, s) claimed to be the projection of the ray
+// point at t (core/kernels/curve_point.h: the residual bounds its error).
+bool claimPoint(double t, OBLONG_IN(dvec2) b, double s, OBLONG_OUT(CurvePoint) outp) {
+  return makePoint(g_F, g_claim, g_O, g_D, t, b, s, outp);
+}
+
+// The curve point at t by inversion.
+bool invertAt(double t, OBLONG_OUT(CurvePoint) outp) {
+  outp.t = t;
+  outp.uv = dvec2(0.0);
+  outp.pad = dvec2(0.0);
+  ++g_inversions;
+  OBLONG_PRECISE dvec3 X = g_O + t * g_D;
+  vec2 bary;
+  float h;
+  OBLONG_HOOK(rpInvert)(vec3(X), bary, h);
+  dvec2 b = dvec2(bary);
+  double nl = lengthD(frameN(g_F, b));
+  if (!(nl > 0.0) || !finiteF(h) || !claimPoint(t, b, double(h) / nl, outp)) {
+    OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BAD_INVERSION);
+    return false;
+  }
+  return true;
+}
+
+// The curve point on {axis = c}, unique, strictly between the piece's ends (closed form
+// on ψ, paper Eq. 3-4; the splitters' SplitContext::crossing).
+bool crossingAt(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, double c, OBLONG_OUT(CurvePoint) outp) {
+  outp = pa;
+  double q2, q1, q0, w[2], rp[2];
+  psiOnLine(g_psi, axis, c, q2, q1, q0);
+  int n = quadraticRoots(q2, q1, q0, w, rp);
+  if (n <= 0) return false;
+  int mi = 1 - axis;
+  dvec2 lo = pieceLo(pa, pb), hi = pieceHi(pa, pb);
+  int found = 0;
+  for (int k = 0; k < n; ++k) {
+    if (w[k] < lo[mi] - rp[k] || w[k] > hi[mi] + rp[k]) continue;
+    dvec2 uv = axis == 0 ? dvec2(c, w[k]) : dvec2(w[k], c);
+    double t, s;
+    if (!rayParamAt(g_F, g_O, g_D, uv, t, s)) continue;
+    if (!(t > pa.t && t < pb.t)) continue;
+    CurvePoint cp;
+    if (!claimPoint(t, frameBary(g_F, uv), s, cp)) continue;
+    outp = cp;
+    ++found;
+  }
+  return found == 1;
+}
+
+// The curve point at t between curve points a and b without an inversion: uv linear in t
+// (exact where T's normals are parallel), s by least squares, one Newton step in double;
+// makePoint's residual bound holds for any claim. Refused when its pad exceeds
+// OBLONG_TRAV_CLAIM_PAD.
+bool pointBetween(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, double t, OBLONG_OUT(CurvePoint) outp) {
+  outp.t = t;
+  outp.uv = dvec2(0.0);
+  outp.pad = dvec2(0.0);
+  dvec2 nb;
+  double ns;
+  if (!claimBetween(g_F, g_O, g_D, a, b, t, nb, ns)) return false;
+  if (!claimPoint(t, nb, ns, outp)) return false;
+  return outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD;
+}
+
+// The curve point at t from the closest hit instead of an inversion: the hit's texture
+// position gives T's barycentrics, s is the least-squares height of X(t) on their
+// displacement line; makePoint's residual bounds the error as for any claim.
+bool pointFromHit(double t, OBLONG_OUT(CurvePoint) outp) {
+  outp.t = t;
+  outp.uv = dvec2(0.0);
+  outp.pad = dvec2(0.0);
+  if (!OBLONG_HOOK(rpHitFound)()) return false;
+  OBLONG_PRECISE dvec2 loc = OBLONG_HOOK(rpToSample)(OBLONG_HOOK(rpHitUV)()) - dvec2(g_origin);
+  dvec2 b = frameBary(g_F, loc);
+  OBLONG_PRECISE dvec3 X = g_O + t * g_D;
+  return claimPoint(t, b, heightOnLine(g_F, X, b), outp);
+}
+
+// ---- boxes ---------------------------------------------------------------------------------
+// The ray interval [t0, t1] (clipped in place) through the box of the micro-geometry over
+// local cells [clo, chi] with heights h, in T's texture frame. False when empty.
+bool clipToBox(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi, OBLONG_IN(vec2) h, OBLONG_INOUT(double) t0,
+               OBLONG_INOUT(double) t1) {
+  dvec2 lo = max(dvec2(clo), g_sbLo), hi = min(dvec2(chi + 1), g_sbHi);
+  dvec3 blo, bhi;
+  OBLONG_HOOK(rpBoxOverRect)(lo, hi, h, blo, bhi);
+  blo = max(blo, g_texLo);
+  bhi = min(bhi, g_texHi);
+  if (blo.x > bhi.x || blo.y > bhi.y || blo.z > bhi.z) return false;
+  clipBox(blo, bhi, g_Ot, g_invDt, t0, t1);
+  return t0 <= t1;
+}
+// The same with the range query's heights over the cells.
+bool clipToCells(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi, OBLONG_INOUT(double) t0, OBLONG_INOUT(double) t1) {
+  ivec2 o = g_origin;
+  ++g_rangeQueries;
+  ++g_boxes;
+  vec2 h = OBLONG_HOOK(rpToHeight)(OBLONG_HOOK(rpRangeRaw)(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
+  return clipToBox(clo, chi, h, t0, t1);
+}
+
+// One step of the march: a cell, rejected by its box (TFDM's leaf test: the four corner
+// samples bound every micro-vertex of the cell, docs/design.md invariant 2) or tested.
+void testCell(int i, int j) {
+  ++g_cells;
+  int I = i + g_origin.x, J = j + g_origin.y;
+  float a = OBLONG_HOOK(rpRaw)(I, J), b = OBLONG_HOOK(rpRaw)(I + 1, J);
+  float c = OBLONG_HOOK(rpRaw)(I, J + 1), e = OBLONG_HOOK(rpRaw)(I + 1, J + 1);
+  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = bestLimit();
+  vec2 h = OBLONG_HOOK(rpToHeight)(vec2(min(min(min(a, b), c), e), max(max(max(a, b), c), e)));
+  if (!clipToBox(ivec2(i, j), ivec2(i, j), h, t0, t1)) return;
+  g_microTris += OBLONG_HOOK(rpCellMicro)(I, J);
+}
+
+// ---- the stack -----------------------------------------------------------------------------
+void pushPiece(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  g_st[g_sp].a = a;
+  g_st[g_sp].b = b;
+  g_st[g_sp].box = false;
+  ++g_sp;
+}
+void pushBox(OBLONG_IN(ivec2) lo, OBLONG_IN(ivec2) hi, double ta, double tb) {
+  g_st[g_sp].cells = ivec4(lo.x, lo.y, hi.x, hi.y);
+  g_st[g_sp].ta = ta;
+  g_st[g_sp].tb = tb;
+  g_st[g_sp].box = true;
+  ++g_sp;
+}
+
+// Local cells touching [lo, hi], clipped to T's cells. False when empty.
+bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
+  double lim = OBLONG_TRAV_SNAP_LIMIT;
+  for (int k = 0; k < 2; ++k) {
+    OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(lo[k]) + abs(hi[k]));
+    clo[k] = int(clamp(floor(lo[k] - eta), -lim, lim));
+    chi[k] = int(clamp(floor(hi[k] + eta), -lim, lim));
+  }
+  clo = max(clo, g_cellLo);
+  chi = min(chi, g_cellHi);
+  return clo.x <= chi.x && clo.y <= chi.y;
+}
+
+// ---- the cells to test: one generator ----------------------------------------------------
+// Mode 1: a cell range, front to back along the approximate direction; mode 2: texel
+// marching of a piece (§4.4), column by column along its major axis.
+int g_gen;
+ivec2 g_gLo, g_gHi;
+int g_gi, g_gj, g_gsx, g_gsy;
+CurvePoint g_ma, g_mb;
+int g_mAx, g_mSa, g_mSm, g_mK, g_mJ, g_mJ0, g_mJ1;
+bool g_mCol;
+// Where a column's minor range cannot narrow its rows, its two solves are skipped (the
+// cells tested stay the same): every row any column could get is one row (g_mOneRow), or
+// the column spans the whole piece and one endpoint is at each end (g_mEnds), when the
+// two ranges join to the piece's minor range.
+bool g_mOneRow, g_mEnds;
+// The march's stop: once a hit is known, cells past the curve's point at the best hit's
+// limit t* cannot hold a better one (the piece is monotone, so its points before t* lie on
+// this side of that point's padded coordinates, and every hit lies within ε of its cell).
+// Per axis, only where the piece's direction along it is certain.
+bool g_mStopSet;
+bvec2 g_mCertain, g_mStopAxis;
+dvec2 g_mStop;
+
+void startCells(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi) {
+  g_gen = 1;
+  g_gLo = clo;
+  g_gHi = chi;
+  g_gsx = g_dvd.x >= 0.0 ? 1 : -1;
+  g_gsy = g_dvd.y >= 0.0 ? 1 : -1;
+  g_gi = g_gsx > 0 ? clo.x : chi.x;
+  g_gj = g_gsy > 0 ? clo.y : chi.y;
+  OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_LEAF);
+}
+
+void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_LEAF);
+  OBLONG_PRECISE dvec2 d = b.uv - a.uv;
+  int ax = abs(d.x) >= abs(d.y) ? 0 : 1, mi = 1 - ax;
+  ivec2 clo, chi;
+  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  g_gen = 2;
+  g_ma = a;
+  g_mb = b;
+  g_mAx = ax;
+  g_gLo = clo;
+  g_gHi = chi;
+  g_mSa = d[ax] >= 0.0 ? 1 : -1;
+  g_mSm = d[mi] >= 0.0 ? 1 : -1;
+  g_mK = g_mSa > 0 ? clo[ax] : chi[ax];
+  g_mCol = false;
+  dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
+  OBLONG_PRECISE double mLo = lo[mi] - g_eps[mi], mHi = hi[mi] + g_eps[mi];
+  OBLONG_PRECISE double etaMax = 2.0 * OBLONG_TRAV_SNAP_ETA * (1.0 + 2.0 * max(abs(mLo), abs(mHi)));
+  g_mOneRow = floor(mLo - etaMax) == floor(mHi + etaMax);
+  g_mEnds = (atEnd(a, ax, lo[ax]) && atEnd(b, ax, hi[ax])) || (atEnd(b, ax, lo[ax]) && atEnd(a, ax, hi[ax]));
+  for (int k = 0; k < 2; ++k) g_mCertain[k] = abs(d[k]) > a.pad[k] + b.pad[k];
+  g_mStopSet = !g_mCertain.x && !g_mCertain.y;
+  g_mStopAxis = bvec2(false, false);
+  g_mStop = dvec2(0.0);
+}
+
+// False when no cell of the marched piece can hold a better hit.
+bool setStop() {
+  g_mStopSet = true;
+  double tStar = bestLimit();
+  if (tStar <= g_ma.t) return false;
+  CurvePoint m;
+  if (tStar < g_mb.t && (pointFromHit(tStar, m) || invertAt(tStar, m)))
+    for (int k = 0; k < 2; ++k)
+      if (g_mCertain[k]) {
+        OBLONG_PRECISE double margin = m.pad[k] + g_ma.pad[k] + g_mb.pad[k];
+        int sg = k == g_mAx ? g_mSa : g_mSm;
+        g_mStop[k] = sg > 0 ? m.uv[k] + margin : m.uv[k] - margin;
+        g_mStopAxis[k] = true;
+      }
+  return true;
+}
+bool pastStop(int a, int k) {
+  int sg = a == g_mAx ? g_mSa : g_mSm;
+  return g_mStopAxis[a] && (sg > 0 ? double(k) - g_eps[a] > g_mStop[a] : double(k + 1) + g_eps[a] < g_mStop[a]);
+}
+
+// The minor coordinate range of the marched piece where its major coordinate is c.
+void minorAt(double c, OBLONG_OUT(double) wlo, OBLONG_OUT(double) whi) {
+  int ax = g_mAx, mi = 1 - ax;
+  dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
+  wlo = kInfD;
+  whi = -kInfD;
+  // An endpoint whose major coordinate may be c: the sub-arc may start or end there.
+  for (int k = 0; k < 2; ++k) {
+    CurvePoint e = k == 0 ? g_ma : g_mb;
+    if (atEnd(e, ax, c)) {
+      wlo = min(wlo, e.uv[mi] - e.pad[mi]);
+      whi = max(whi, e.uv[mi] + e.pad[mi]);
+    }
+  }
+  double q2, q1, q0, w[2], rp[2];
+  psiOnLine(g_psi, ax, c, q2, q1, q0);
+  int n = quadraticRoots(q2, q1, q0, w, rp);
+  if (n < 0) {  // ψ vanishes on the whole line: the curve may run along it
+    wlo = lo[mi];
+    whi = hi[mi];
+    return;
+  }
+  for (int k = 0; k < n; ++k)
+    if (w[k] >= lo[mi] - rp[k] && w[k] <= hi[mi] + rp[k]) {
+      wlo = min(wlo, w[k] - rp[k]);
+      whi = max(whi, w[k] + rp[k]);
+    }
+  if (!(wlo <= whi)) {  // lost to rounding: the whole range
+    wlo = lo[mi];
+    whi = hi[mi];
+  }
+  wlo = max(wlo, lo[mi]);
+  whi = min(whi, hi[mi]);
+}
+
+// The next cell of the current generator; false when it is exhausted.
+bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
+  ci = 0;
+  cj = 0;
+  if (g_gen == 1) {
+    if (g_gsy > 0 ? g_gj > g_gHi.y : g_gj < g_gLo.y) return false;
+    ci = g_gi;
+    cj = g_gj;
+    g_gi += g_gsx;
+    if (g_gsx > 0 ? g_gi > g_gHi.x : g_gi < g_gLo.x) {
+      g_gi = g_gsx > 0 ? g_gLo.x : g_gHi.x;
+      g_gj += g_gsy;
+    }
+    return true;
+  }
+  int ax = g_mAx, mi = 1 - ax;
+  for (;;) {
+    if (!g_mCol) {
+      if (g_mSa > 0 ? g_mK > g_gHi[ax] : g_mK < g_gLo[ax]) return false;
+      if ((!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) || pastStop(ax, g_mK)) {
+        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+        return false;
+      }
+      // The piece's points whose major coordinate is within ε of column k.
+      dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
+      OBLONG_PRECISE double c0 = max(double(g_mK) - g_eps[ax], lo[ax]), c1 = min(double(g_mK + 1) + g_eps[ax], hi[ax]);
+      if (c0 > c1) {
+        g_mK += g_mSa;
+        continue;
+      }
+      double r[4];
+      if (g_mOneRow || (g_mEnds && c0 == lo[ax] && c1 == hi[ax])) {
+        r[0] = lo[mi];
+        r[1] = hi[mi];
+        r[2] = lo[mi];
+        r[3] = hi[mi];
+      } else {
+        for (int k = 0; k < 2; ++k) minorAt(k == 0 ? c0 : c1, r[2 * k], r[2 * k + 1]);
+      }
+      // Monotone: in between, the minor coordinate lies between its values at c0 and c1.
+      OBLONG_PRECISE double wlo = min(r[0], r[2]) - g_eps[mi], whi = max(r[1], r[3]) + g_eps[mi];
+      OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(wlo) + abs(whi));
+      g_mJ0 = max(int(floor(wlo - eta)), g_gLo[mi]);
+      g_mJ1 = min(int(floor(whi + eta)), g_gHi[mi]);
+      g_mJ = g_mSm > 0 ? g_mJ0 : g_mJ1;
+      g_mCol = true;
+    }
+    if (g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0) {
+      if (!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) {
+        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+        return false;
+      }
+      if (pastStop(mi, g_mJ)) {
+        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+        g_mCol = false;
+        g_mK += g_mSa;
+        continue;
+      }
+      ci = ax == 0 ? g_mK : g_mJ;
+      cj = ax == 0 ? g_mJ : g_mK;
+      g_mJ += g_mSm;
+      return true;
+    }
+    g_mCol = false;
+    g_mK += g_mSa;
+  }
+  return false;
+}
+
+// ---- pieces and boxes ----------------------------------------------------------------------
+// Pads that dominate the rectangle cannot be split away: such a piece is a leaf too.
+bool pieceSmall(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  dvec2 ext = pieceHi(a, b) - pieceLo(a, b);
+  dvec2 pads = a.pad + b.pad;
+  int la = ext.x >= ext.y ? 0 : 1;
+  return ext[la] <= g_leafScale || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
+}
+
+// A piece too small to split is marched, unless ε (float rounding at a fine texel) is
+// wide against the marching scale; then its cells are subdivided as boxes, down to blocks
+// of OBLONG_TRAV_WIDE_BOX_CELLS, which prune across the curve where the march would test
+// every cell within ε of it.
+void leafPiece(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  if (!g_wideEps) {
+    startMarch(a, b);
+    return;
+  }
+  OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_WIDE_LEAF);
+  ivec2 clo, chi;
+  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  pushBox(clo, chi, a.t, min(b.t, bestLimit()));
+}
+
+void processPiece(CurvePoint a, CurvePoint b) {
+  if (a.t > bestLimit()) return;
+  if (pieceSmall(a, b)) {
+    leafPiece(a, b);
+    return;
+  }
+  ivec2 clo, chi;
+  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  double t0 = a.t, t1 = min(b.t, bestLimit());
+  if (!clipToCells(clo, chi, t0, t1)) return;
+  // Up to three inversions at one call site: the clipped ends (Fig. 5a: their
+  // projections can give a much smaller rectangle), then the split's point when the
+  // splitter asks for the curve point at a t.
+  OBLONG_PRECISE dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
+  OBLONG_PRECISE double gainDt = b.t - a.t;
+  OBLONG_PRECISE double minGain =
+      max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
+  CurvePoint m;
+  bool ok = false;
+  for (int e = g_inversionInTraversal ? 0 : 2; e < 3; ++e) {
+    bool need;
+    double t;
+    if (e < 2) {
+      need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
+      t = e == 0 ? t0 : t1;
+    } else {
+      if (pieceSmall(a, b)) {
+        leafPiece(a, b);
+        return;
+      }
+      if (g_sp + 2 > g_stackDepth) {  // overflow: correct, just not hierarchical
+        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_OVERFLOW);
+        startMarch(a, b);
+        return;
+      }
+      int r = OBLONG_HOOK(rpSplit)(a, b, m, t);
+      ok = r == 1;
+      need = r == 2;
+    }
+    CurvePoint q;
+    if (need && ((e < 2 && pointBetween(a, b, t, q)) || invertAt(t, q))) {
+      if (e == 0) a = q;
+      else if (e == 1) b = q;
+      else {
+        m = q;
+        ok = true;
+      }
+    }
+  }
+  if (!ok) {
+    OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PIECE);
+    pushBox(clo, chi, t0, t1);
+    return;
+  }
+  pushPiece(m, b);
+  pushPiece(a, m);
+}
+
+void processBox(ivec2 clo, ivec2 chi, double ta, double tb) {
+  double limit = bestLimit();
+  if (ta > limit) return;
+  ivec2 n = chi - clo + 1;
+  float block = g_wideEps ? min(float(OBLONG_TRAV_WIDE_BOX_CELLS), g_marchingScale) : g_marchingScale;
+  if (float(max(n.x, n.y)) <= max(float(OBLONG_TRAV_MIN_BOX_CELLS), block)) {
+    startCells(clo, chi);
+    return;
+  }
+  double t0 = ta, t1 = min(tb, limit);
+  if (!clipToCells(clo, chi, t0, t1)) return;
+  if (g_sp + 2 > g_stackDepth) {
+    OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_OVERFLOW);
+    startCells(clo, chi);
+    return;
+  }
+  int ax = n.x >= n.y ? 0 : 1;
+  int mid = clo[ax] + (n[ax] - 1) / 2;
+  ivec2 aHi = chi, bLo = clo;
+  aHi[ax] = mid;
+  bLo[ax] = mid + 1;
+  // Lower half first when the ray runs towards +axis (order matters for speed only).
+  if (g_dvd[ax] >= 0.0) {
+    pushBox(bLo, chi, t0, t1);
+    pushBox(clo, aHi, t0, t1);
+  } else {
+    pushBox(clo, aHi, t0, t1);
+    pushBox(bLo, chi, t0, t1);
+  }
+}
+
+// Front to back until the stack and the current cell generator are empty.
+void rpLoop() {
+  for (;;) {
+    if (g_gen != 0) {
+      int ci, cj;
+      if (nextCell(ci, cj)) {
+        testCell(ci, cj);
+        continue;
+      }
+      g_gen = 0;
+    }
+    if (g_sp == 0) break;
+    --g_sp;
+    RpEntry e = g_st[g_sp];
+    if (e.box) processBox(ivec2(e.cells.x, e.cells.y), ivec2(e.cells.z, e.cells.w), e.ta, e.tb);
+    else processPiece(e.a, e.b);
+  }
+}
+
+// Projection-free subdivision of all of T's cells (ill-posed triangles, fallbacks).
+void setupBoxOnly() {
+  OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PRISM);
+  g_boxOnly = true;
+  g_sp = 0;
+  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = bestLimit();
+  clipBox(g_boxLo, g_boxHi, g_O, g_invD, t0, t1);
+  if (!(t0 <= t1)) return;
+  g_dvd = dirLocal();
+  pushBox(g_cellLo, g_cellHi, t0, t1);
+}
+
+// Up to the stack: 0 = no hit possible, 1 = box-only, 2 = pieces pushed.
+int setupCurve() {
+  if (!g_wellPosed) {
+    OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_ILL_POSED);
+    return 1;
+  }
+  // 1. The inflated prism (with the margin for the watertight test's rounding).
+  dvec3 plo, phi;
+  OBLONG_HOOK(rpInflatedBox)(plo, phi);
+  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = double(g_tmax) + slack(double(g_tmax));
+  clipBox(plo, phi, g_O, g_invD, t0, t1);
+  if (!(t0 <= t1)) return 0;
+  Crossing first, last;
+  int nc = OBLONG_HOOK(rpPrismCrossings)(first, last);
+  if (nc == 0) return 0;  // the line misses the inflated prism
+  if (nc < 2) {
+    OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_GRAZE);
+    return 1;
+  }
+  double tIn = max(first.t, double(g_tmin) - slack(double(g_tmin)));
+  double tOut = min(last.t, double(g_tmax) + slack(double(g_tmax)));
+  if (!(tIn <= tOut)) return 0;
+  g_psi = psiMake(g_F, g_O, g_D);
+  g_dvd = dirLocal();
+  // 2. Monotone pieces, between ψ's turning points. Their curve points, at one call site
+  // of the inversion: the two ends (the crossings', or where the ray starts or ends
+  // inside, claimed between them or inverted), then the turning points; a failure falls
+  // back to boxes.
+  double ts[4];
+  int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, ts);
+  CurvePoint pts[6];
+  CurvePoint F, L;
+  bool okF = claimPoint(first.t, first.bary, first.s, F), okL = claimPoint(last.t, last.bary, last.s, L);
+  bool okEnds = true;
+  for (int k = 0; k < ns + 2; ++k) {
+    if (k == 2 && !okEnds) return 1;
+    Crossing c = k == 0 ? first : last;
+    double t = k == 0 ? tIn : (k == 1 ? tOut : ts[k - 2]);
+    bool ok;
+    CurvePoint p;
+    if (k < 2 && t == c.t) {
+      p = k == 0 ? F : L;
+      ok = k == 0 ? okF : okL;
+    } else {
+      ok = (k < 2 && okF && okL && pointBetween(F, L, t, p)) || invertAt(t, p);
+    }
+    if (k >= 2) {
+      if (!ok) return 1;
+      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);
+    }
+    okEnds = okEnds && ok;
+    pts[k == 0 ? 0 : (k == 1 ? ns + 1 : k - 1)] = p;
+  }
+  if (!okEnds) return 1;
+  g_sp = 0;
+  for (int k = ns; k >= 0; --k) pushPiece(pts[k], pts[k + 1]);
+  return 2;
+}
+
+// One ray against one triangle after rpInit: true when a micro-triangle was hit (the hit
+// is the includer's, through rpCellMicro).
+bool rpRun() {
+  g_gen = 0;
+  g_sp = 0;
+  int r = setupCurve();
+  if (r == 1) setupBoxOnly();
+  if (r != 0) rpLoop();
+  return OBLONG_HOOK(rpHitFound)();
+}
