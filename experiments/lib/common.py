@@ -15,6 +15,9 @@ and `common.main(module)` gives it the command line
 
     run.py [--quick] [--build DIR] [--out DIR] [--reps N] [--scratch DIR]
 
+(arguments(): other scripts under experiments/ share it). That interface is also how
+`run_all` finds the experiments (lib/discovery.py).
+
 Outputs go to --out (default: the experiment's own folder in a full run; run_all
 passes a scratch folder in quick mode, so the committed full results are never
 overwritten by a quick run).
@@ -408,6 +411,17 @@ def machine_info() -> dict:
     }
 
 
+def repo_path(p: Path) -> str:
+    """`p` as results record it: relative to the repository's root, or, outside the
+    repository, its folder's name and its own (a machine's absolute paths stay out of
+    committed results)."""
+    p = Path(p).resolve()
+    try:
+        return str(p.relative_to(ROOT))
+    except ValueError:
+        return f"{p.parent.name}/{p.name} (outside the repository)"
+
+
 def build_info(binary: Path) -> dict:
     b = Path(binary).resolve()
     h = hashlib.sha256(b.read_bytes()).hexdigest()[:16]
@@ -422,7 +436,7 @@ def build_info(binary: Path) -> dict:
     except Exception:  # noqa: BLE001
         pass
     return {
-        "binary": str(b.relative_to(ROOT)) if str(b).startswith(str(ROOT)) else str(b),
+        "binary": repo_path(b),
         "binary_sha256_16": h,
         "binary_mtime": datetime.datetime.fromtimestamp(b.stat().st_mtime, datetime.timezone.utc).isoformat(
             timespec="seconds"),
