@@ -15,6 +15,9 @@ and `common.main(module)` gives it the command line
 
     run.py [--quick] [--build DIR] [--out DIR] [--reps N] [--scratch DIR]
 
+(arguments(): other scripts under experiments/ share it). That interface is also how
+`run_all` finds the experiments (lib/discovery.py).
+
 Outputs go to --out (default: the experiment's own folder in a full run; run_all
 passes a scratch folder in quick mode, so the committed full results are never
 overwritten by a quick run).
@@ -29,7 +32,6 @@ import json
 import math
 import os
 import platform
-import random
 import re
 import shutil
 import signal
@@ -37,20 +39,16 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 import traceback
 from pathlib import Path
 
+import runner
 import runstore
-
-ROOT = Path(__file__).resolve().parents[2]
-EXPERIMENTS = ROOT / "experiments"
-SCENES = ROOT / "scenes"
-# A folder whose NAME.json replaces scenes/NAME.json where it exists: the tests point it at
-# the build's copies (build/test_data/scenes/), which read the asteroid from the build
-# instead of /usr/share.
-SCENE_OVERRIDE = Path(os.environ["OBLONG_SCENE_OVERRIDE"]) if os.environ.get("OBLONG_SCENE_OVERRIDE") else None
+# What experiments reach through this module (C.load_scene, C.ExperimentError, ...) lives
+# in runner.py, below both this module and runstore.py.
+from runner import (EXPERIMENTS, ROOT, SCENE_OVERRIDE, SCENES, Context, ExperimentError, Run,  # noqa: F401
+                    load_scene, scene_path, strip_json_comments)
 
 # The two configurations every experiment is about (docs/traversal.md).
 CANONICAL = []  # the defaults: rmip (full resolution) + newton + midpoint2d, marching 4, inversion on
@@ -122,64 +120,6 @@ def tessellation_fit(ctx, scene) -> dict:
     return r
 
 
-class ExperimentError(RuntimeError):
-    pass
-
-
-# ---------------------------------------------------------------------------------------
-# Scenes
-
-
-def strip_json_comments(text: str) -> str:
-    """Removes // and /* */ comments outside strings (the scene format allows them)."""
-    out, i, n, in_str = [], 0, len(text), False
-    while i < n:
-        c = text[i]
-        if in_str:
-            out.append(c)
-            if c == "\\" and i + 1 < n:
-                out.append(text[i + 1])
-                i += 2
-                continue
-            if c == '"':
-                in_str = False
-            i += 1
-        elif c == '"':
-            in_str = True
-            out.append(c)
-            i += 1
-        elif text.startswith("//", i):
-            j = text.find("\n", i)
-            i = n if j < 0 else j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            i = n if j < 0 else j + 2
-        else:
-            out.append(c)
-            i += 1
-    return "".join(out)
-
-
-def load_scene(path: Path) -> dict:
-    """A scene file as a dict, with relative mesh and map paths made absolute (so that a
-    variant written elsewhere still finds them)."""
-    path = Path(path)
-    doc = json.loads(strip_json_comments(path.read_text()))
-    for m in doc.get("meshes", []):
-        if "file" in m and not os.path.isabs(m["file"]):
-            m["file"] = str((path.parent / m["file"]).resolve())
-        d = m.get("displacement")
-        if d and not os.path.isabs(d["map"]):
-            d["map"] = str((path.parent / d["map"]).resolve())
-    return doc
-
-
-def scene_path(name: str) -> Path:
-    if SCENE_OVERRIDE is not None and (SCENE_OVERRIDE / f"{name}.json").is_file():
-        return SCENE_OVERRIDE / f"{name}.json"
-    return SCENES / f"{name}.json"
-
-
 def map_size(scene: dict) -> tuple[int, int]:
     """Width and height of the first displaced mesh's map (PNG header)."""
     for m in scene["meshes"]:
@@ -246,93 +186,6 @@ def rmip_nearest_resolution(ctx, scene: str, target: int) -> tuple[int, int, int
     return max(1, side // best), best, at(best)
 
 
-# ---------------------------------------------------------------------------------------
-# Context and running oblong
-
-
-class Context:
-    def __init__(self, name: str, binary: Path, out: Path, scratch: Path, quick: bool, reps: int | None,
-                 threads: int = 1, log=None):
-        self.name = name
-        self.binary = Path(binary).resolve()
-        self.out = Path(out)
-        self.scratch = Path(scratch)
-        self.quick = quick
-        self.reps_override = reps
-        self.threads = threads
-        self.runs = 0
-        self.scenes: dict[str, dict] = {}  # variant name -> the JSON written (recorded in run.json)
-        self.variant_base: dict[str, str] = {}  # variant file -> the scene it varies (Slurm shards)
-        self.configs: dict[str, dict] = {}  # label -> flags and the resolved config from the stats
-        self.start = time.time()
-        self.load_start = os.getloadavg()
-        self._log = log or (lambda s: print(f"[{name}] {s}", flush=True))
-        self.out.mkdir(parents=True, exist_ok=True)
-        self.scratch.mkdir(parents=True, exist_ok=True)
-
-    def log(self, s: str) -> None:
-        self._log(s)
-
-    def reps(self, full: int, quick: int = 1) -> int:
-        if self.reps_override:
-            return self.reps_override
-        return quick if self.quick else full
-
-    def pick(self, full, quick):
-        return quick if self.quick else full
-
-    def tmp(self, *parts) -> Path:
-        p = self.scratch.joinpath(*parts)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        return p
-
-    def write_scene(self, name: str, doc: dict) -> Path:
-        """Writes a scene variant into the scratch folder and records it."""
-        p = self.tmp("scenes", f"{name}.json")
-        p.write_text(json.dumps(doc, indent=1))
-        self.scenes[name] = doc
-        return p
-
-    def scene_variant(self, base: str, name: str, strategies: dict | None = None, displacement: dict | None = None,
-                      image: dict | None = None) -> Path:
-        doc = load_scene(scene_path(base))
-        if strategies is not None:
-            doc["strategies"] = strategies
-        if displacement:
-            for m in doc["meshes"]:
-                if "displacement" in m:
-                    m["displacement"].update(displacement)
-        if image:
-            doc["image"] = image
-        p = self.write_scene(name, doc)
-        self.variant_base[str(p.resolve())] = base
-        return p
-
-    def record_config(self, label: str, run: "Run") -> None:
-        c = self.configs.setdefault(label, {"command": run.cmd_str(), "scene": run.scene,
-                                            "resolved": run.stats.get("config"),
-                                            "geometry": run.stats.get("geometry")})
-        c.setdefault("memory", run.stats.get("memory"))
-
-
-class Run:
-    def __init__(self, cmd, scene, stats, wall, cpu, stdout):
-        self.cmd, self.scene, self.stats, self.wall, self.cpu, self.stdout = cmd, scene, stats, wall, cpu, stdout
-
-    def cmd_str(self) -> str:
-        return " ".join(str(Path(c).relative_to(ROOT)) if str(c).startswith(str(ROOT) + "/") else str(c)
-                        for c in self.cmd)
-
-    @property
-    def seconds(self) -> float:
-        s = self.stats["seconds"]
-        return s["render"] if "render" in s else s["trace"]
-
-    @property
-    def build_seconds(self) -> float:
-        return self.stats["seconds"]["build"]
-
-
 _STRATEGIES: dict = {}
 
 
@@ -356,75 +209,27 @@ def strategy_names(ctx: Context, kind: str) -> list:
     return [default] + [n for n in names if n != default]
 
 
-# The run store (lib/runstore.py) when `run_all --backend slurm` runs this experiment in
-# passes; None in a local run, which runs every `oblong` here and now.
-STORE = None
+# Who executes the runs: runner.Local() here and now, or lib/runstore.py's Store when
+# `run_all --backend slurm` runs this experiment in passes (set by main).
+RUNNER = runner.Local()
 
 
 def run_oblong(ctx: Context, sub: str, scene, args: list, label: str | None = None, timeout: float = 600,
                threads: int | None = None) -> Run:
     """Runs `oblong SUB SCENE ARGS --threads 1 --stats TMP.json`; returns the parsed stats,
     the process's wall time and CPU time (user + system, from wait4)."""
-    if STORE is not None:
-        return STORE.run(ctx, sub, scene, args, label, timeout, threads)
-    return _run_oblong_here(ctx, sub, scene, args, label, timeout, threads)
-
-
-def _run_oblong_here(ctx: Context, sub: str, scene, args: list, label: str | None, timeout: float,
-                     threads: int | None) -> Run:
-    fd, stats_path = tempfile.mkstemp(suffix=".json", dir=ctx.scratch)
-    os.close(fd)
-    th = ctx.threads if threads is None else threads
-    cmd = [str(ctx.binary), sub, str(scene)] + [str(a) for a in args] + ["--threads", str(th), "--stats", stats_path]
-    if sub == "render":
-        cmd.append("-q")
-        if "-o" not in cmd:
-            cmd += ["-o", str(ctx.tmp("render.png"))]
-    t0 = time.time()
-    with tempfile.TemporaryFile(dir=ctx.scratch) as fout, tempfile.TemporaryFile(dir=ctx.scratch) as ferr:
-        p = subprocess.Popen(cmd, stdout=fout, stderr=ferr, cwd=ROOT)
-        timer = threading.Timer(timeout, p.kill)
-        timer.start()
-        try:
-            # wait4: the CPU time (user + system) of this child alone.
-            _, status, ru = os.wait4(p.pid, 0)
-        finally:
-            timer.cancel()
-        p.returncode = os.waitstatus_to_exitcode(status)
-        wall = time.time() - t0
-        cpu = ru.ru_utime + ru.ru_stime
-        fout.seek(0)
-        ferr.seek(0)
-        out, err = fout.read(), ferr.read()
-    if p.returncode != 0:
-        if os.path.exists(stats_path):
-            os.unlink(stats_path)
-        raise ExperimentError(f"exit status {p.returncode}: {' '.join(cmd)}\n{err.decode(errors='replace')[-2000:]}")
-    try:
-        stats = json.load(open(stats_path))
-    finally:
-        os.unlink(stats_path)
-    ctx.runs += 1
-    r = Run(cmd, str(scene), stats, wall, cpu, out.decode(errors="replace"))
-    if label:
-        ctx.record_config(label, r)
-    return r
+    return RUNNER.run(ctx, sub, scene, args, label, timeout, threads)
 
 
 def interleaved(ctx: Context, jobs: list, reps: int, seed: int = 1) -> dict:
     """jobs: (key, sub, scene, args) tuples. Runs `reps` rounds; each round runs every job
-    once, in a fresh random order (seeded), so that slow drifts of the machine's load hit
-    all configurations alike. Returns {key: [Run per round]} (rounds in order)."""
-    if STORE is not None:
-        return STORE.interleaved(ctx, jobs, reps, seed)
+    once, in a fresh random order (runner.schedule), so that slow drifts of the machine's
+    load hit all configurations alike. Returns {key: [Run per round]} (rounds in order)."""
+    rounds = runner.schedule(jobs, reps, seed)
     out = {j[0]: [] for j in jobs}
-    rng = random.Random(seed)
-    for rep in range(reps):
-        order = list(jobs)
-        rng.shuffle(order)
-        for key, sub, scene, args in order:
-            out[key].append(run_oblong(ctx, sub, scene, args, label=key))
-        ctx.log(f"round {rep + 1}/{reps} done ({len(jobs)} runs, load {os.getloadavg()[0]:.1f})")
+    for order, runs in zip(rounds, RUNNER.rounds(ctx, rounds)):
+        for job, r in zip(order, runs):
+            out[job[0]].append(r)
     return out
 
 
@@ -581,7 +386,7 @@ def _first_line(cmd: list) -> str:
 
 
 def machine_info() -> dict:
-    cpu = runstore.cpu_model()
+    cpu = runner.cpu_model()
     mem = "?"
     try:
         for line in open("/proc/meminfo"):
@@ -606,6 +411,17 @@ def machine_info() -> dict:
     }
 
 
+def repo_path(p: Path) -> str:
+    """`p` as results record it: relative to the repository's root, or, outside the
+    repository, its folder's name and its own (a machine's absolute paths stay out of
+    committed results)."""
+    p = Path(p).resolve()
+    try:
+        return str(p.relative_to(ROOT))
+    except ValueError:
+        return f"{p.parent.name}/{p.name} (outside the repository)"
+
+
 def build_info(binary: Path) -> dict:
     b = Path(binary).resolve()
     h = hashlib.sha256(b.read_bytes()).hexdigest()[:16]
@@ -620,7 +436,7 @@ def build_info(binary: Path) -> dict:
     except Exception:  # noqa: BLE001
         pass
     return {
-        "binary": str(b.relative_to(ROOT)) if str(b).startswith(str(ROOT)) else str(b),
+        "binary": repo_path(b),
         "binary_sha256_16": h,
         "binary_mtime": datetime.datetime.fromtimestamp(b.stat().st_mtime, datetime.timezone.utc).isoformat(
             timespec="seconds"),
@@ -642,13 +458,42 @@ def default_build() -> Path:
     return ROOT / "build-exp"
 
 
-def main(module) -> int:
-    ap = argparse.ArgumentParser(description=f"{module.NAME}: {module.TITLE}")
+def arguments(name: str, title: str, build: Path | None = None) -> argparse.ArgumentParser:
+    """The command line every script under experiments/ shares,
+
+        run.py [--quick] [--build DIR] [--out DIR] [--reps N] [--scratch DIR]
+
+    (`build`: the default --build, build-exp/ unless given); a script adds its own options
+    to the parser and resolves the shared ones with outputs()."""
+    ap = argparse.ArgumentParser(description=f"{name}: {title}")
     ap.add_argument("--quick", action="store_true", help="tiny sizes and ray counts (CI)")
-    ap.add_argument("--build", default=str(default_build()), help="build folder holding `oblong`")
-    ap.add_argument("--out", default=None, help="output folder (default: experiments/NAME in a full run)")
+    ap.add_argument("--build", default=str(build or default_build()), help="build folder holding `oblong`")
+    ap.add_argument("--out", default=None, help=f"output folder (default: experiments/{name} in a full run)")
     ap.add_argument("--scratch", default=None, help="folder for temporary files (default: a temporary folder)")
-    ap.add_argument("--reps", type=int, default=None, help="override the number of interleaved rounds")
+    ap.add_argument("--reps", type=int, default=None, help="override the number of rounds")
+    return ap
+
+
+class UsageError(Exception):
+    pass
+
+
+def outputs(name: str, a: argparse.Namespace) -> tuple[Path, Path]:
+    """The `oblong` binary and the output folder that arguments()' options name: --out, or
+    experiments/NAME in a full run (a quick run needs --out, so that it never overwrites
+    the committed results). UsageError when either is missing."""
+    binary = Path(a.build) / "oblong"
+    if not binary.exists():
+        raise UsageError(f"{name}: {binary} not found (build it, or run experiments/run_all)")
+    if a.out is None:
+        if a.quick:
+            raise UsageError(f"{name}: --quick needs --out (quick results never overwrite the committed ones)")
+        return binary, EXPERIMENTS / name
+    return binary, Path(a.out)
+
+
+def main(module) -> int:
+    ap = arguments(module.NAME, module.TITLE)
     # Used by `run_all --backend slurm` (lib/runstore.py, lib/slurm.py), not by hand.
     ap.add_argument("--store", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--store-pass", choices=["plan", "worker"], default="plan", help=argparse.SUPPRESS)
@@ -660,26 +505,20 @@ def main(module) -> int:
     # A SIGTERM (a killed run_all, a cancelled Slurm job) unwinds like an error: the scratch
     # folder is removed.
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
-    global STORE
+    global RUNNER
+    store = None
     if a.store:
-        STORE = runstore.Store(a.store, a.store_pass, a.shard, a.session)
-    binary = Path(a.build) / "oblong"
-    if not binary.exists():
-        print(f"{module.NAME}: {binary} not found (build it, or run experiments/run_all)", file=sys.stderr)
+        store = RUNNER = runstore.Store(a.store, a.store_pass, a.shard, a.session)
+    try:
+        binary, out = outputs(module.NAME, a)
+    except UsageError as e:
+        print(e, file=sys.stderr)
         return 2
-    if a.out is None:
-        if a.quick:
-            print(f"{module.NAME}: --quick needs --out (quick results never overwrite the committed ones)",
-                  file=sys.stderr)
-            return 2
-        out = EXPERIMENTS / module.NAME
-    else:
-        out = Path(a.out)
     scratch = Path(a.scratch) if a.scratch else Path(tempfile.mkdtemp(prefix=f"oblong-{module.NAME}-"))
     keep = a.scratch is not None
     ctx = Context(module.NAME, binary, out, scratch, a.quick, a.reps)
     started = datetime.datetime.now(datetime.timezone.utc)
-    if STORE is not None and a.since:
+    if store is not None and a.since:
         # Across passes and Slurm jobs: from the first pass on.
         ctx.start = a.since
         started = datetime.datetime.fromtimestamp(a.since, datetime.timezone.utc)
@@ -689,14 +528,14 @@ def main(module) -> int:
         status = summary.get("status", "ok")
     except runstore.Pending as p:
         if a.plan_file:
-            Path(a.plan_file).write_text(json.dumps({"pending": sorted(p.shards), "stored": STORE.reused,
-                                                     "missing": STORE.missing}))
-        print(f"[{module.NAME}] plan: {STORE.reused} runs stored, {STORE.missing} missing so far; to run: "
+            Path(a.plan_file).write_text(json.dumps({"pending": sorted(p.shards), "stored": store.reused,
+                                                     "missing": store.missing}))
+        print(f"[{module.NAME}] plan: {store.reused} runs stored, {store.missing} missing so far; to run: "
               + "; ".join(runstore.describe_shard(x) for x in sorted(p.shards)), flush=True)
         return 75
     except runstore.ShardDone:
-        print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} run(s) executed and stored on "
-              f"{STORE.node['host']}", flush=True)
+        print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {store.executed} run(s) executed and stored on "
+              f"{store.node['host']}", flush=True)
         return 0
     except Exception as e:  # noqa: BLE001 - reported in the summary and the exit status
         traceback.print_exc()
@@ -738,15 +577,15 @@ def main(module) -> int:
     summary["build"] = record["build"]
     summary["load_average"] = [record["load_average_start"], record["load_average_end"]]
     summary["started_utc"] = record["started_utc"]
-    if STORE is not None:
-        if STORE.mode == "worker":
-            print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {STORE.executed} run(s) executed and stored "
-                  f"on {STORE.node['host']}; {status}", flush=True)
+    if store is not None:
+        if store.mode == "worker":
+            print(f"[{module.NAME}] {runstore.describe_shard(a.shard)}: {store.executed} run(s) executed and stored "
+                  f"on {store.node['host']}; {status}", flush=True)
             # A run that failed here fails the job, so that run_all reports it with this log.
             return 1 if status == "failed" else 0
         # Every run came from the store: where and in which Slurm job each ran.
-        nodes = {u["host"]: u["cpu"] for u in STORE.used}
-        record["backend"] = {"name": "slurm", "store": str(STORE.root), "nodes": nodes, "runs": STORE.used}
+        nodes = {u["host"]: u["cpu"] for u in store.used}
+        record["backend"] = {"name": "slurm", "store": str(store.root), "nodes": nodes, "runs": store.used}
         summary["nodes"] = nodes
     # Paths inside the repository are written relative to its root.
     def dump(x):

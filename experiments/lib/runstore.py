@@ -4,7 +4,9 @@ inputs, so that runs can execute in Slurm jobs on other nodes, be gathered by th
 process that writes the experiment's results, and be skipped when run_all is rerun.
 
 An experiment's `run(ctx)` is not changed for this. It is executed in passes, with
-`common.run_oblong` and `common.interleaved` answered from the store:
+`common.run_oblong` and `common.interleaved` answered from the store (a Store is the
+runner common.py hands its runs to, in place of runner.Local; the rounds and their
+orders are runner.schedule's either way):
 
 - plan (on the submitting machine): every run the experiment asks for is looked up.
   When one is missing, the pass stops (raises Pending) and names the shards that are
@@ -32,11 +34,12 @@ import hashlib
 import json
 import os
 import platform
-import random
 import shutil
 import socket
 import time
 from pathlib import Path
+
+import runner
 
 OUTPUT_FLAGS = ("-o", "--aovs")
 GENERATED = "generated"  # the shard name of scenes an experiment writes from scratch
@@ -85,19 +88,8 @@ def describe_shard(s: str) -> str:
     return f"{g}, round {r + 1}"
 
 
-def cpu_model() -> str:
-    """The CPU's model name from /proc/cpuinfo ("?" where it cannot be read)."""
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "?"
-
-
 def node_info() -> dict:
-    cpu = cpu_model()
+    cpu = runner.cpu_model()
     job = os.environ.get("SLURM_ARRAY_JOB_ID")
     task = os.environ.get("SLURM_ARRAY_TASK_ID")
     return {"host": socket.gethostname() or platform.node(), "cpu": cpu,
@@ -106,9 +98,6 @@ def node_info() -> dict:
 
 class Store:
     def __init__(self, root, mode: str, shard: str | None = None, session: str = ""):
-        import common as C
-
-        self.C = C
         self.root = Path(root)
         self.mode = mode  # "plan" or "worker"
         self.shard = shard
@@ -125,11 +114,11 @@ class Store:
     # --- keys -----------------------------------------------------------------------
 
     def _norm(self, ctx, s: str) -> str:
-        return s.replace(str(ctx.scratch), "<scratch>").replace(str(self.C.ROOT), "<root>")
+        return s.replace(str(ctx.scratch), "<scratch>").replace(str(runner.ROOT), "<root>")
 
     def group_of(self, ctx, scene) -> str:
         p = Path(scene).resolve()
-        for folder in (self.C.SCENES, self.C.SCENE_OVERRIDE):
+        for folder in (runner.SCENES, runner.SCENE_OVERRIDE):
             try:
                 return str(p.relative_to(folder.resolve()).with_suffix(""))
             except (ValueError, AttributeError):
@@ -137,9 +126,8 @@ class Store:
         return ctx.variant_base.get(str(p), GENERATED)
 
     def base_key(self, ctx, sub: str, scene, args: list, threads: int) -> str:
-        C = self.C
         scene = Path(scene)
-        doc = C.load_scene(scene)
+        doc = runner.load_scene(scene)
         data = []
         for m in doc.get("meshes", []):
             for f in (m.get("file"), (m.get("displacement") or {}).get("map")):
@@ -182,7 +170,6 @@ class Store:
 
     def _execute(self, ctx, key, shard, sub, scene, args, label, timeout, th):
         """Runs oblong here and stores the run: result.json and the output files."""
-        C = self.C
         d = self._dir(key)
         tmp = d.parent / f".{key}.{os.getpid()}.tmp"
         shutil.rmtree(tmp, ignore_errors=True)
@@ -191,8 +178,8 @@ class Store:
                "session": self.session, "node": self.node,
                "finished_utc": None}
         try:
-            r = C._run_oblong_here(ctx, sub, scene, args, None, timeout, th)
-        except C.ExperimentError as e:
+            r = runner.run_here(ctx, sub, scene, args, None, timeout, th)
+        except runner.ExperimentError as e:
             rec.update({"ok": False, "error": str(e)})
             r = None
         except BaseException:
@@ -220,10 +207,9 @@ class Store:
         return rec
 
     def _load(self, ctx, rec, sub, scene, args, label, threads):
-        """A stored run as a common.Run, its output files copied where this call wants them."""
-        C = self.C
+        """A stored run as a runner.Run, its output files copied where this call wants them."""
         if not rec.get("ok"):
-            raise C.ExperimentError(rec.get("error", "failed"))
+            raise runner.ExperimentError(rec.get("error", "failed"))
         args = [str(a) for a in args]
         for i, name in rec.get("outputs", {}).items():
             dst = Path(args[int(i)])
@@ -232,14 +218,14 @@ class Store:
         th = ctx.threads if threads is None else threads
         cmd = [str(ctx.binary), sub, str(scene)] + args + ["--threads", str(th), "--stats", "<stored>"]
         ctx.runs += 1
-        r = C.Run(cmd, str(scene), rec["stats"], rec["wall"], rec["cpu"], rec["stdout"])
+        r = runner.Run(cmd, str(scene), rec["stats"], rec["wall"], rec["cpu"], rec["stdout"])
         if label:
             ctx.record_config(label, r)
         self.used.append({"label": label, "shard": rec["shard"], "key": rec["key"], **rec["node"],
                           "finished_utc": rec["finished_utc"]})
         return r
 
-    # --- the two entry points common.py hands over to ---------------------------------
+    # --- the runner's two methods (as runner.Local's) ---------------------------------
 
     def run(self, ctx, sub, scene, args, label, timeout, threads):
         th = ctx.threads if threads is None else threads
@@ -257,35 +243,30 @@ class Store:
             raise Pending({shard})
         return self._load(ctx, rec, sub, scene, args, label, threads)
 
-    def interleaved(self, ctx, jobs: list, reps: int, seed: int = 1) -> dict:
-        # The same rounds and orders as common.interleaved's local run.
-        rng = random.Random(seed)
-        rounds = []
-        for rep in range(reps):
-            order = list(jobs)
-            rng.shuffle(order)
-            rounds.append([(job, self.key(ctx, job[1], job[2], job[3], ctx.threads),
-                            shard_name(self.group_of(ctx, job[2]), rep)) for job in order])
-        recs = {k: self.stored(k) for rnd in rounds for _, k, _ in rnd}
+    def rounds(self, ctx, rounds: list) -> list:
+        """runner.schedule's rounds of (key, sub, scene, args) jobs from the store; per round
+        the Runs in the round's order. A worker executes its shard's rounds that are not
+        stored whole, in the round's order."""
+        keyed = [[(job, self.key(ctx, job[1], job[2], job[3], ctx.threads),
+                   shard_name(self.group_of(ctx, job[2]), rep)) for job in order]
+                 for rep, order in enumerate(rounds)]
+        recs = {k: self.stored(k) for rnd in keyed for _, k, _ in rnd}
         if self.mode == "worker":
-            for rep, rnd in enumerate(rounds):
+            for rep, rnd in enumerate(keyed):
                 mine = [(job, k) for job, k, s in rnd if s == self.shard]
                 if mine and any(recs[k] is None for _, k in mine):
-                    ctx.log(f"round {rep + 1}/{reps}: {len(mine)} runs of {describe_shard(self.shard)} on "
+                    ctx.log(f"round {rep + 1}/{len(keyed)}: {len(mine)} runs of {describe_shard(self.shard)} on "
                             f"{self.node['host']}")
                     for (key_, sub, scene, args), k in mine:
                         recs[k] = self._execute(ctx, k, self.shard, sub, scene, args, key_, 600, ctx.threads)
             if any(r is None for r in recs.values()):
                 raise ShardDone()
         else:
-            missing = {s for rnd in rounds for _, k, s in rnd if recs[k] is None}
+            missing = {s for rnd in keyed for _, k, s in rnd if recs[k] is None}
             if missing:
                 self.missing += sum(1 for r in recs.values() if r is None)
                 self.reused += sum(1 for r in recs.values() if r is not None)
                 raise Pending(missing)
         self.reused += len(recs)
-        out = {j[0]: [] for j in jobs}
-        for rep, rnd in enumerate(rounds):
-            for (key_, sub, scene, args), k, _ in rnd:
-                out[key_].append(self._load(ctx, recs[k], sub, scene, args, key_, None))
-        return out
+        return [[self._load(ctx, recs[k], sub, scene, args, key_, None) for (key_, sub, scene, args), k, _ in rnd]
+                for rnd in keyed]

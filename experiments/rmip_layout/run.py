@@ -2,15 +2,18 @@
 """RMIP's storage layouts side by side on the paper-scale scenes: bytes, build time, steps
 per camera ray and render time (docs/range_query.md, "Layouts").
 
-    experiments/rmip_layout/run.py [--build build] [--size 320x240] [--scenes a,b] [--out DIR]
+    experiments/rmip_layout/run.py [--build build] [--size 320x240] [--scenes a,b] [--out DIR] [--reps N]
+    experiments/rmip_layout/run.py --quick --out DIR     # the asteroid at 32x24, one round
 
-Each scene is rendered with camera rays only (1 spp, one thread) once per layout and
+The options --quick, --build, --out, --reps and --scratch are every experiment's
+(common.arguments); --build defaults to build/ here, since the step counts need
+statistics compiled in. Each scene is rendered with camera rays only (1 spp, one thread) once per layout and
 round (--reps, default 3), the layouts interleaved per scene so that the time ratios are
 taken side by side; the tables give each time's minimum over the rounds. Writes
 results.csv and results.md into --out (default: this folder). Step counts are
-deterministic; times carry the machine's load, which the table records.
+deterministic; times carry the machine's load, which the table records, with the binary
+(its path in the repository, its hash and the git commit).
 """
-import argparse
 import csv
 import json
 import os
@@ -21,9 +24,8 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent.parent
 sys.path.insert(0, str(HERE.parent / "lib"))
-from common import load_scene  # noqa: E402
+import common as C  # noqa: E402
 
 LAYOUTS = [
     ("pairs_16", {"name": "rmip"}),  # the default
@@ -35,31 +37,40 @@ SCENES = ["paper/alien_sphere", "paper/terracotta_roof", "paper/diving_helmet", 
           "paper/creature", "asteroid"]
 
 
+QUICK_SCENES = ["asteroid"]
+
+
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--build", default="build")
-    ap.add_argument("--size", default="320x240")
-    ap.add_argument("--scenes", default=",".join(SCENES))
-    ap.add_argument("--out", default=str(HERE))
-    ap.add_argument("--reps", type=int, default=3, help="renders per (scene, layout), interleaved; times are the minimum")
+    ap = C.arguments("rmip_layout", "RMIP's storage layouts on the paper-scale scenes", build=C.ROOT / "build")
+    ap.add_argument("--size", default=None, help="image size (default 320x240, 32x24 with --quick)")
+    ap.add_argument("--scenes", default=None, help="comma-separated scene names (default: the paper-scale suite "
+                                                   "and the asteroid; the asteroid with --quick)")
     a = ap.parse_args()
-    oblong = (ROOT / a.build / "oblong").resolve()
-    out = Path(a.out)
+    try:
+        oblong, out = C.outputs("rmip_layout", a)
+    except C.UsageError as e:
+        print(e, file=sys.stderr)
+        return 2
+    size = a.size or ("32x24" if a.quick else "320x240")
+    scenes = a.scenes.split(",") if a.scenes else (QUICK_SCENES if a.quick else SCENES)
+    reps = a.reps or (1 if a.quick else 3)  # renders per (scene, layout); times are the minimum
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     load = os.getloadavg()
     started = time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())
-    with tempfile.TemporaryDirectory() as tmp:
-        for name in a.scenes.split(","):
-          doc = load_scene(ROOT / "scenes" / f"{name}.json")
-          for rep in range(a.reps):
+    if a.scratch:
+        Path(a.scratch).mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=a.scratch) as tmp:
+        for name in scenes:
+          doc = C.load_scene(C.scene_path(name))
+          for rep in range(reps):
             for label, rq in LAYOUTS:
                 variant = dict(doc, strategies={"range": rq})
                 sp = Path(tmp) / f"{name.replace('/', '_')}_{label}.json"
                 sp.write_text(json.dumps(variant))
                 stats = Path(tmp) / "stats.json"
                 t0 = time.time()
-                r = subprocess.run([str(oblong), "render", str(sp), "-o", str(Path(tmp) / "img.png"), "--size", a.size,
+                r = subprocess.run([str(oblong), "render", str(sp), "-o", str(Path(tmp) / "img.png"), "--size", size,
                                     "--spp", "1", "--integrator", "primary", "--threads", "1", "-q",
                                     "--stats", str(stats)], capture_output=True, text=True)
                 if r.returncode != 0:
@@ -87,10 +98,12 @@ def main() -> int:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         w.writeheader()
         w.writerows(rows)
-    lines = [f"# RMIP layouts on the paper-scale scenes ({a.size}, camera rays, 1 thread, "
-             f"minimum over {a.reps} interleaved rounds)", "",
+    b = C.build_info(oblong)
+    lines = [f"# RMIP layouts on the paper-scale scenes ({size}, camera rays, 1 thread, "
+             f"minimum over {reps} interleaved rounds)", "",
              f"Run {started} to {time.strftime('%H:%M UTC', time.gmtime())}, load average at start "
-             f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}; {oblong}.", "",
+             f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}; {b['binary']} (sha256 {b['binary_sha256_16']}…, git "
+             f"{b['git'].get('commit', '?')[:12]}).", "",
              "| scene | layout | rmip MiB | build s | render s | steps / camera ray | range queries | hits |",
              "|---|---|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
