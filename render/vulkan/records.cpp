@@ -9,6 +9,7 @@
 #include "traversal/lod_per_ray.h"
 #include "traversal/traversal.h"
 #include "render/vulkan/rmip_layout.h"
+#include "traversal/tfdm_view.h"
 #include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"
 
