@@ -7,7 +7,7 @@
 
 #include "core/asset_scene.h"
 #include "core/scene.h"
-#include "render/embree_scene.h"
+#include "render/accel_options.h"
 #include "render/renderer.h"
 #include "render/trace_backend.h"
 

@@ -7,7 +7,7 @@
 #pragma once
 
 #include "core/scene.h"
-#include "render/embree_scene.h"
+#include "render/accel_options.h"
 #include "render/trace_backend.h"
 
 #include <memory>
