@@ -1,5 +1,5 @@
 // `--device vulkan` for oblong trace and oblong render, and oblong bake
-// (render/apps/oblong.cpp calls these after it has read the scene and the strategy
+// (apps/oblong.cpp calls these after it has read the scene and the strategy
 // flags). Rendering, tracing and the summaries are the CPU's (render/renderer.h,
 // render/report.h), on the Vulkan trace backend. Without the Vulkan target (CMake option
 // OBLONG_VULKAN off, or Vulkan / glslc not installed), the stubs in commands_stub.cpp
