@@ -33,8 +33,7 @@ LAYERS = [
 # or folder, why). A path names itself and everything under it.
 RULES = [
     ("render/vulkan", "render/embree_scene.h",
-     "the Vulkan path takes the device-neutral headers (render/accel_options.h, render/tessellation.h), "
-     "not Embree's backend"),
+     "the Vulkan path takes the device-neutral render/accel_options.h, not Embree's backend"),
 ]
 SOURCE = re.compile(r"\.(h|hpp|cpp|cc|glsl|rgen|rint|rchit|rahit|rmiss|comp)$")
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
