@@ -2,7 +2,7 @@
 #include "render/cone_lod.h"
 
 #include "core/error.h"
-#include "render/embree_scene.h"
+#include "render/embree_ray.h"
 
 #include <glm/glm.hpp>
 

@@ -9,8 +9,10 @@
 
 #include "core/memory.h"
 #include "core/scene.h"
-#include "render/cone_lod.h"
+#include "render/accel_options.h"
+#include "render/embree_ray.h"
 #include "render/far_rays.h"
+#include "render/tessellation.h"
 #include "render/trace_backend.h"
 #include "traversal/intersector.h"
 
@@ -22,57 +24,7 @@
 
 namespace oblong {
 
-// A ray as Embree takes it, no hit yet.
-RTCRayHit toRayHit(const Ray& r);
-
-// The pre-tessellation baseline's name (TraversalConfig::baseline): registered in
-// BaselineRegistry as built by the scene (render/embree_scene.cpp), so it is listed and
-// chosen like every baseline; EmbreeScene builds it instead of user geometry.
-inline constexpr const char* kTessellatedBaseline = "tessellated";
-
-struct AccelOptions {
-  TraversalConfig traversal;  // strategies for the displaced meshes, or a baseline
-  // The default strategies with a baseline instead, e.g. withBaseline("tessellated").
-  static AccelOptions withBaseline(const std::string& name) {
-    AccelOptions o;
-    o.traversal.baseline = name;
-    return o;
-  }
-};
-
-// The traversal configuration a scene file asks for (its "strategies" block).
-TraversalConfig traversalConfigOf(const Scene& scene);
-
-// The pre-tessellation baseline's size for one displaced mesh, computed before it is
-// built (EmbreeScene refuses a scene whose micro-triangles would not fit in memory).
-struct TessellationEstimate {
-  // Embree's BVH over the micro-triangles (RTC_SCENE_FLAG_ROBUST, default quality),
-  // measured on grids of 2-134 M triangles: 54-64 bytes per triangle after the build,
-  // 84-98 in all (RSS) at the peak of the build (docs/range_query.md, "Memory").
-  static constexpr size_t kBvhBytesPerTriangle = 64;
-  static constexpr size_t kBvhBuildBytesPerTriangle = 100;
-
-  size_t microTriangles = 0;  // exact: what the baseline builds
-  size_t vertices = 0;        // shared vertices, an upper bound (Euler's formula per patch)
-  size_t tableBytes = 0;      // the patches' vertex tables, all of them
-  size_t largestTable = 0;    // and the largest one
-  size_t geometryBytes() const {  // vertices + padding, uvs, indices, base prims, as stored
-    return (vertices + 1) * sizeof(vec4) + vertices * sizeof(vec2) + microTriangles * (sizeof(glm::uvec3) + 4);
-  }
-  size_t bvhBytes() const { return microTriangles * kBvhBytesPerTriangle; }
-  size_t patchBytes() const { return vertices * (sizeof(vec4) + sizeof(vec2)) + microTriangles * sizeof(glm::uvec3); }
-};
-TessellationEstimate estimateTessellation(const Mesh& mesh, const Displacement& d);
-// The micro-triangles the pre-tessellation baseline builds for each triangle of the mesh
-// (forEachMicroTriangle's, counted without building them; 0 for a skipped triangle).
-std::vector<size_t> microTriangleCounts(const Mesh& mesh, const Displacement& d);
-// A point of a mesh's frame in world floats: origin + p summed in double, rounded once
-// (plain meshes' vertices as Embree traces them, and `oblong export`'s positions; the
-// pre-tessellated micro-triangles are traced in the mesh's frame instead).
-inline vec3 worldFloat(const Mesh& mesh, const vec3& p) { return vec3(mesh.origin + dvec3(p)); }
-// Bytes held at the peak of building these meshes' tessellations and their BVH
-// (patches with their vertex tables, the concatenated buffers, Embree's build).
-size_t tessellationPeakBytes(const std::vector<TessellationEstimate>& meshes, size_t threads);
+class ConeLod;  // render/cone_lod.h: the scene owns one under --lod cone
 
 // What a displaced mesh's user-geometry callbacks need: its intersector, which works in
 // the mesh's frame (Mesh::origin), and the frame's origin.
@@ -112,9 +64,7 @@ class EmbreeScene : public TraceBackend {
   bool concurrent() const override { return true; }
   // The level of detail of a ray with cone c under --lod cone (ConeLod::lod); 0 for a
   // scene built without TraversalConfig::lodPerRay.
-  float coneLod(const Ray& r, const RayCone& c, float bias) const override {
-    return cone_ ? cone_->lod(r, c, bias) : 0.0f;
-  }
+  float coneLod(const Ray& r, const RayCone& c, float bias) const override;
   bool tessellated() const { return tessellate_; }
   std::string geometryName() const override;
   std::string geometryText() const override;

@@ -3,8 +3,8 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/microgeometry.h"
-#include "render/embree_scene.h"
 #include "render/output.h"
+#include "render/tessellation.h"
 
 #include <fcntl.h>
 #include <unistd.h>

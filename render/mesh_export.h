@@ -2,7 +2,7 @@
 // so that other renderers and tools can load it.
 //
 // The triangles are the pre-tessellation baseline's (`--baseline tessellated`,
-// render/embree_scene.cpp), in the same order: per
+// render/tessellation.h), in the same order: per
 // displaced mesh, the micro-triangles forEachMicroTriangle emits for each base triangle
 // (the oracle's, core/microgeometry.h), at the scene's level of detail; per plain mesh,
 // its triangles. Positions are in world coordinates, each micro-vertex rounded once from

@@ -5,6 +5,7 @@
 #include "core/lod.h"
 #include "core/memory.h"
 #include "core/procedural.h"
+#include "render/embree_scene.h"
 #include "render/vulkan/commands.h"
 
 #include <fmt/core.h>

@@ -1,5 +1,5 @@
-// What the programs share: the command line (render/apps/oblong.cpp) and the Python
-// module (render/python/) load a scene, choose its strategies by name, build a device's
+// What the programs share: the command line (apps/oblong.cpp) and the Python
+// module (python/) load a scene, choose its strategies by name, build a device's
 // trace backend and check a render's options through these, so that both accept the same
 // input and fail with the same one-line messages (oblong::Error, naming the command
 // line's flag: "--range: unknown strategy 'x' (known: ...)").
@@ -7,7 +7,7 @@
 
 #include "core/asset_scene.h"
 #include "core/scene.h"
-#include "render/embree_scene.h"
+#include "render/accel_options.h"
 #include "render/renderer.h"
 #include "render/trace_backend.h"
 

@@ -10,7 +10,7 @@
 #pragma once
 
 #include "core/math.h"
-#include "render/embree_scene.h"
+#include "render/trace_backend.h"  // Hit
 
 #include <string>
 #include <vector>

@@ -9,7 +9,7 @@
 #pragma once
 
 #include "core/scene.h"
-#include "render/embree_scene.h"
+#include "render/accel_options.h"
 #include "render/figures.h"
 #include "render/renderer.h"
 #include "render/trace_backend.h"

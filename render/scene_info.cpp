@@ -2,8 +2,8 @@
 #include "render/scene_info.h"
 
 #include "core/lod.h"
-#include "render/embree_scene.h"
 #include "render/report.h"
+#include "render/tessellation.h"
 #include "strategies/range_query.h"
 #include "traversal/traversal.h"
 
@@ -63,7 +63,7 @@ json describeMesh(const Scene& scene, const SceneMesh& sm, const TraversalConfig
                 {"full_resolution", {d.level0->width(), d.level0->height()}}};
   if (!cfg.baseline.empty() && BaselineRegistry::instance().has(cfg.baseline) &&
       BaselineRegistry::instance().traits(cfg.baseline).builtByScene) {
-    // No intersector: the scene builds the micro-triangles (EmbreeScene's estimate).
+    // No intersector: the scene builds the micro-triangles (the pre-tessellation baseline's estimate).
     const TessellationEstimate e = estimateTessellation(sm.mesh, d);
     m["baseline"] = cfg.baseline;
     m["tessellation"] = {

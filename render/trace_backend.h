@@ -1,5 +1,5 @@
 // The trace backend: what the renderer (render/integrator.h), `oblong trace` and the
-// statistics writer (the command line, render/apps/oblong.cpp) need of a device's scene. Batches of rays in, the
+// statistics writer (the command line, apps/oblong.cpp) need of a device's scene. Batches of rays in, the
 // closest hits (or whether each ray is blocked) and each ray's traversal work out; and
 // what was built: its geometry, describe(), memory, the device. Implemented by
 // EmbreeScene (render/embree_scene.h, the CPU), vk::VulkanScene
@@ -74,7 +74,7 @@ class TraceBackend {
   // render/cone_lod.h); 0 for a scene built without a level of detail per ray.
   virtual float coneLod(const Ray&, const RayCone&, float /*bias*/) const { return 0.0f; }
 
-  // What was built, for the summary and `--stats` (the command line, render/apps/oblong.cpp).
+  // What was built, for the summary and `--stats` (the command line, apps/oblong.cpp).
   virtual std::string geometryName() const = 0;  // "rmip+newton+midpoint2d", "tessellated", ...
   virtual size_t baseTriangles() const = 0;
   virtual double buildSeconds() const = 0;

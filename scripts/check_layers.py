@@ -4,8 +4,9 @@
 Every quoted #include in C++, GLSL and shader-stage files is resolved (against the
 including file's folder, then the repository root) and both ends are given their layer;
 a file may include its own folder's layer and any lower one, never a higher one and never
-a different folder of the same rank (peers stay independent). Prints one line per
-offence and exits 1; prints the layer table with --list.
+a different folder of the same rank (peers stay independent). Within a layer, RULES
+forbid particular includes (the Vulkan path may not include Embree's backend). Prints
+one line per offence and exits 1; prints the layer table and the rules with --list.
 
     python3 scripts/check_layers.py [--root DIR] [--list]
 """
@@ -22,11 +23,17 @@ LAYERS = [
     ("strategies", 2, "range queries and splitters (strategies)"),
     ("traversal", 3, "the method: driver, RayPatch, prisms, psi, bounds, micro-triangles, baselines"),
     ("render", 4, "Embree and Vulkan scenes, cameras, images, the integrators, output"),
-    ("render/apps", 5, "the programs: oblong, oblong_vkbench"),
-    ("render/python", 5, "the Python module oblong"),
+    ("apps", 5, "the programs: oblong, oblong_vkbench"),
+    ("python", 5, "the Python module oblong"),
     ("tests/fixtures", 5, "scenes, rays and stiff inputs shared by tests and experiments"),
     ("tests", 6, "unit, conformance and CLI tests"),
     ("experiments", 6, "benchmarks and the paper's experiments"),
+]
+# Includes forbidden whatever the ranks: (the including files' folder, the included file
+# or folder, why). A path names itself and everything under it.
+RULES = [
+    ("render/vulkan", "render/embree_scene.h",
+     "the Vulkan path takes the device-neutral render/accel_options.h, not Embree's backend"),
 ]
 SOURCE = re.compile(r"\.(h|hpp|cpp|cc|glsl|rgen|rint|rchit|rahit|rmiss|comp)$")
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
@@ -35,10 +42,14 @@ INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 def layer_of(rel):
     best = None
     for prefix, rank, _ in LAYERS:
-        if rel == prefix or rel.startswith(prefix + "/"):
+        if under(rel, prefix):
             if best is None or len(prefix) > len(best[0]):
                 best = (prefix, rank)
     return best
+
+
+def under(rel, prefix):
+    return rel == prefix or rel.startswith(prefix + "/")
 
 
 def main():
@@ -50,6 +61,8 @@ def main():
     if args.list:
         for prefix, rank, what in LAYERS:
             print(f"{rank}  {prefix + '/':<16} {what}")
+        for src, target, why in RULES:
+            print(f"{src}/ may not include {target}: {why}")
         return 0
     offences, checked = [], 0
     for top, _, _ in LAYERS:
@@ -77,6 +90,9 @@ def main():
                                 break
                         if target is None:
                             continue  # generated (build folder) or a system header in quotes
+                        for src, banned, why in RULES:
+                            if under(rel, src) and under(target, banned):
+                                offences.append(f"{rel}:{lineno}: includes {target}, which {src}/ may not: {why}")
                         to = layer_of(target)
                         if to is None:
                             offences.append(f"{rel}:{lineno}: includes {target}, which is in no layer")

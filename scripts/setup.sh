@@ -41,7 +41,7 @@ if [ "$minimal" = 0 ]; then
     clang libclang-rt-14-dev
   )
 
-  # The Python module (render/python/, docs/python.md) for Debian's /usr/bin/python3: pybind11
+  # The Python module (python/, docs/python.md) for Debian's /usr/bin/python3: pybind11
   # and the interpreter's headers; pytest runs its tests (tests/python/).
   PKGS+=(pybind11-dev python3-dev python3-pytest)
 

@@ -7,7 +7,7 @@
 // min/max of codes is the code of the min/max: a structure can be built on codes.
 #pragma once
 
-#include "core/kernels/tfdm.h"
+#include "core/kernels/quantize16.h"
 #include "core/math.h"
 
 #include <algorithm>

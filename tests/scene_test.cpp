@@ -1,7 +1,7 @@
 #include "core/error.h"
 #include "core/scene.h"
 #include "core/triangle.h"
-#include "render/embree_scene.h"
+#include "render/accel_options.h"
 #include "test_util.h"
 
 #include <catch2/catch.hpp>

@@ -6,7 +6,6 @@
 #include "core/stats.h"
 #include "inversion/ceres.h"
 #include "inversion/newton.h"
-#include "render/embree_scene.h"
 #include "traversal/intersector.h"
 #include "traversal/prism.h"
 #include "traversal/psi.h"

@@ -20,7 +20,7 @@
 // Steps as the RMIP paper's Fig. 9 counts them: every node whose box is tested
 // (`boxes`) plus every leaf cell tested (`cells_marched`). docs/tfdm.md gives the
 // sources of each choice.
-#include "traversal/traversal.h"
+#include "traversal/tfdm_view.h"
 
 #include "core/error.h"
 #include "core/kernels/tfdm.h"

@@ -1,7 +1,7 @@
 // The "tfdm" baseline's per-node kernels (Thonat et al. 2021 §4, as traversal/tfdm.cpp
 // traverses): the roots of a triangle, a node's cells within the triangle's cell range,
-// the 2D rejection of a node whose square misses the triangle, and the join and decode
-// of the pyramid's 16-bit codes. Written once for the CPU's `tfdm` and the Vulkan
+// the 2D rejection of a node whose square misses the triangle; the join of the pyramid's
+// 16-bit codes is quantize16.h's. Written once for the CPU's `tfdm` and the Vulkan
 // intersection shader tfdm.rint, in the subset of core/kernels/lang.h; the node's box is
 // rect_bounds.h's boxOverRect and a leaf's micro-triangles are microcells.h's, as in the
 // canonical traversal. Cell indices are ints: the Vulkan path refuses maps whose cell
@@ -10,6 +10,7 @@
 #define OBLONG_KERNELS_TFDM_H
 
 #include "core/kernels/lang.h"
+#include "core/kernels/quantize16.h"  // the pyramid's code join, which tfdm.glsl takes from here
 
 OBLONG_KERNELS_BEGIN
 
@@ -59,13 +60,6 @@ OBLONG_INLINE bool tfdmOutside(OBLONG_IN(dvec2) S0, OBLONG_IN(dvec2) S1, OBLONG_
       return true;
   }
   return false;
-}
-
-// The pyramid's 16-bit nodes: low code | high code << 16 (strategies/quantize.h's
-// Quantizer16); 0xffff is the empty node, the identity of the join.
-OBLONG_INLINE uint joinCodes16(uint a, uint b) {
-  uint lo = min(a & 0xffffu, b & 0xffffu), hi = max(a >> 16, b >> 16);
-  return lo | (hi << 16);
 }
 
 OBLONG_KERNELS_END

@@ -1,5 +1,5 @@
 // `--device vulkan` for oblong trace and oblong render, and oblong bake
-// (render/apps/oblong.cpp calls these after it has read the scene and the strategy
+// (apps/oblong.cpp calls these after it has read the scene and the strategy
 // flags). Rendering, tracing and the summaries are the CPU's (render/renderer.h,
 // render/report.h), on the Vulkan trace backend. Without the Vulkan target (CMake option
 // OBLONG_VULKAN off, or Vulkan / glslc not installed), the stubs in commands_stub.cpp
@@ -7,7 +7,7 @@
 #pragma once
 
 #include "core/scene.h"
-#include "render/embree_scene.h"
+#include "render/accel_options.h"
 #include "render/trace_backend.h"
 
 #include <memory>

@@ -6,10 +6,12 @@
 #include "traversal/prism.h"
 
 #include "core/error.h"
+#include "core/scene.h"
+#include "render/accel_options.h"
 #include "traversal/lod_per_ray.h"
+#include "traversal/tfdm_view.h"
 #include "traversal/traversal.h"
 #include "render/vulkan/rmip_layout.h"
-#include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"
 
 #include <cmath>

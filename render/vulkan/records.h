@@ -7,10 +7,18 @@
 
 #include "core/kernels/device_records.h"
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
+
+namespace oblong {
+// Declared only: the runner and the baked file use the records without the CPU libraries.
+struct Scene;
+struct AccelOptions;
+}  // namespace oblong
 
 namespace oblong::vk {
 
@@ -35,5 +43,12 @@ struct GpuRecords {
   uint64_t baseTriangles = 0;
   uint64_t triBytes = 0, rmipBytes = 0, texelBytes = 0;  // memory report
 };
+
+// The records of every mesh, built with the CPU's own code (createIntersector). Throws
+// oblong::Error with one line when the configuration is not the canonical one
+// (rmip + newton + midpoint2d, no baseline) or the maps exceed the 32-bit offsets.
+// `describe`, when given, gets each displaced mesh's Intersector::describe() ("mesh":
+// its index), as EmbreeScene::describe() gives them.
+GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::json* describe = nullptr);
 
 }  // namespace oblong::vk

@@ -8,8 +8,9 @@
 
 #include "core/memory.h"
 #include "core/scene.h"
+#include "render/accel_options.h"
 #include "render/cone_lod.h"
-#include "render/embree_scene.h"
+#include "render/far_rays.h"
 #include "render/trace_backend.h"
 #include "render/vulkan/records.h"
 
@@ -20,13 +21,6 @@
 namespace oblong::vk {
 
 class Runner;
-
-// The records of every mesh, built with the CPU's own code (createIntersector). Throws
-// oblong::Error with one line when the configuration is not the canonical one
-// (rmip + newton + midpoint2d, no baseline) or the maps exceed the 32-bit offsets.
-// `describe`, when given, gets each displaced mesh's Intersector::describe() ("mesh":
-// its index), as EmbreeScene::describe() gives them.
-GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::json* describe = nullptr);
 
 // The Vulkan trace backend (render/trace_backend.h): one batch at a time (one queue).
 class VulkanScene : public TraceBackend {

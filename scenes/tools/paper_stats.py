@@ -12,7 +12,7 @@ have their pole vertex at the middle of their segment), and multiplies each tria
 uv area by the tiled sample count (tiling_u * W) * (tiling_v * H), W x H read from the
 map's PNG header. It prints the mean and the largest number of samples per base
 triangle, and the pre-tessellation estimate: micro-triangles ~ 2 x covered samples
-(two per sample cell), bytes at oblong's constants (render/embree_scene.h,
+(two per sample cell), bytes at oblong's constants (render/tessellation.h,
 TessellationEstimate): per micro-triangle about 28 B of geometry (half a vertex of
 16 + 8 B, 12 B of indices, 4 B of base-triangle index) plus 64 B of Embree BVH after the
 build, 100 B of BVH at the build's peak: 92 B kept, 128 B at the peak (what `oblong

@@ -15,7 +15,7 @@
 // --splitter, --marching-scale, --inversion-in-traversal, --baseline, --step.
 // Without a scene file, the built-in default scene is used (no data files needed).
 // Loading, the strategy flags, the device's backend and the render options are
-// render/program.h's, shared with the Python module (render/python/).
+// render/program.h's, shared with the Python module (python/).
 // Every bad input ends with one line "oblong: FILE: problem" and exit status 1; every
 // output path is checked before any work. Ctrl-C during `render` finishes the tiles in
 // flight, writes what was rendered (marked partial in --stats) and exits with 130.
@@ -25,7 +25,6 @@
 #include "core/memory.h"
 #include "core/scene.h"
 #include "core/stats.h"
-#include "render/embree_scene.h"
 #include "render/figures.h"
 #include "render/image.h"
 #include "render/mesh_export.h"
