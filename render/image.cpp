@@ -104,7 +104,7 @@ void writeImage(const Image& img, const std::string& path) {
   const std::string ext = lowerExtension(path);
   if (ext == ".pfm") return writeTextOutput(path, encodePFM(img));
   const bool linear = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
-  ImagePixels px{img.width, img.height, 3, linear, img.pixels.data()};
+  ImagePixels px{img.width, img.height, 3, linear, img.pixels.data(), {}, -1};
   std::vector<unsigned char> bytes;
   if (!linear) {
     bytes.resize(img.pixels.size() * 3);

@@ -340,9 +340,7 @@ void writeAOVs(const AOVs& aov, const std::string& path) {
     o[4] = aov.normal[i].x, o[5] = aov.normal[i].y, o[6] = aov.normal[i].z;
     o[7] = aov.steps[i], o[8] = aov.rangeQueries[i], o[9] = aov.inversions[i], o[10] = aov.cellsMarched[i];
   }
-  ImagePixels img{W, H, C, true, px.data()};
-  img.names.assign(std::begin(names), std::end(names));
-  img.zChannel = 3;
+  ImagePixels img{W, H, C, true, px.data(), {std::begin(names), std::end(names)}, 3};
   writeImagePixels(img, path, "AOVs");
 }
 
