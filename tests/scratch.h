@@ -7,11 +7,18 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <system_error>
 #include <vector>
 
 namespace oblong::test {
+
+// Guards the list below: a test case may make its folder from several threads at once.
+inline std::mutex& scratchMutex() {
+  static std::mutex m;
+  return m;
+}
 
 // The folders made since the current test case began.
 inline std::vector<std::filesystem::path>& scratchDirsMade() {
@@ -26,6 +33,7 @@ inline std::filesystem::path scratchPath(const std::string& name) {
 inline std::filesystem::path scratchDir(const std::string& name) {
   auto p = scratchPath(name);
   std::filesystem::create_directories(p);
+  std::lock_guard lock(scratchMutex());
   auto& made = scratchDirsMade();
   if (std::find(made.begin(), made.end(), p) == made.end()) made.push_back(p);
   return p;
@@ -34,6 +42,7 @@ inline std::filesystem::path scratchDir(const std::string& name) {
 // Removes every scratch folder made so far; a later scratchDir of the same name makes it
 // afresh (a test case never sees another's files).
 inline void removeScratchDirs() {
+  std::lock_guard lock(scratchMutex());
   for (const auto& p : scratchDirsMade()) {
     std::error_code ec;
     std::filesystem::remove_all(p, ec);
