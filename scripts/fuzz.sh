@@ -25,8 +25,7 @@ build="${FUZZ_BUILD_DIR:-build-fuzz}"
 # than RelWithDebInfo's -O2 -g, and the reports still name file and line.
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
-  "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -gline-tables-only -DNDEBUG" \
-  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+  -DCMAKE_CXX_COMPILER=clang++ \
   -DOBLONG_BUILD_FUZZERS=ON -DOBLONG_BUILD_TESTS=OFF -DOBLONG_BUILD_BENCHMARKS=OFF >/dev/null
 # shellcheck disable=SC2086
 cmake --build "$build" -j "${JOBS:-2}" --target $targets

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 
@@ -311,6 +312,44 @@ TEST_CASE("bad mesh-file input gives one error line naming the file", "[assets][
   oneError(runOblongCli("info " + scene + " --displacement " + (dir() / "height.png").string()),
            {"--displacement: applies to a mesh file given instead of a scene", "plain.json is a scene file"});
   oneError(runOblongCli("info " + (dir() / "absent.obj").string()), {"absent.obj: file not found"});
+}
+
+TEST_CASE("a glTF's buffer is an input no output names, an empty image uri and two materials of one name are named",
+          "[assets][cli][bad_input]") {
+  heightMap("height.png", OIIO::TypeDesc::UINT8);
+  nlohmann::json material = {
+      {"name", "m"},
+      {"extensions",
+       {{"KHR_materials_displacement",
+         {{"displacementGeometryTexture", {{"index", 0}}}, {"displacementGeometryFactor", 0.2}}}}}};
+  nlohmann::json j = quadGltf(material, "g.bin");
+  j["images"][0]["uri"] = "height.png";
+  const std::string gltf = write("g.gltf", j.dump()), bin = write("g.bin", quadBuffer());
+  write("g.csv", "ox,oy,oz,dx,dy,dz,tmin,tmax\n0,0,3,0,0,-1,0,inf\n");
+  // Every output naming the buffer is refused and the buffer kept (it was overwritten).
+  const std::string d = dir().string() + "/";
+  for (const std::string& args : {"render " + gltf + " --size 8x8 -q -o " + d + "g.png --stats " + bin,
+                                  "trace " + gltf + " --rays " + d + "g.csv -o " + bin, "bake " + gltf + " -o " + bin}) {
+    INFO(args);
+    oneError(runOblongCli(args), {"names an input of this command", "g.bin"});
+    std::ifstream in(bin, std::ios::binary);
+    CHECK(std::string(std::istreambuf_iterator<char>(in), {}) == quadBuffer());
+  }
+  // An empty uri dropped the displacement without a word.
+  nlohmann::json empty = j;
+  empty["images"][0]["uri"] = "";
+  oneError(runOblongCli("info " + write("empty.gltf", empty.dump())),
+           {"empty.gltf: images[0].uri: is empty: give the displacement map's file name"});
+  // Two materials named alike but different: the one not used is named as "another".
+  nlohmann::json two = j;
+  two["materials"].push_back(material);
+  two["materials"][1]["extensions"]["KHR_materials_displacement"]["displacementGeometryFactor"] = 0.5;
+  two["meshes"][0]["primitives"].push_back(two["meshes"][0]["primitives"][0]);
+  two["meshes"][0]["primitives"][1]["material"] = 1;
+  const CliRun info = runOblongCli("info " + write("two.gltf", two.dump()));
+  INFO(info.err);
+  CHECK(info.status == 0);
+  CHECK_THAT(info.err, Contains("two.gltf: oblong applies one material to a whole mesh file: 'm'; not used: another 'm'"));
 }
 
 TEST_CASE("a mesh file is told from a scene file by its extension", "[assets]") {

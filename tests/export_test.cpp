@@ -360,7 +360,7 @@ std::vector<float> depthOf(const fs::path& exr) {
 // map (texels 0.023 wide) at 1e9, where floats are 64 apart, had 2 418 identical vertices
 // and no word about it. The export counts the micro-triangles whose distinct vertices the
 // floats merge and the command prints one warning line; at the origin nothing merges.
-TEST_CASE("export: a plane far from the origin keeps its vertices distinct or warns that floats merge them", "[export][bad_input][unit]") {
+TEST_CASE("export: a plane far from the origin keeps its vertices distinct or warns that floats merge them", "[export][bad_input]") {
   const fs::path dir = test::scratchDir("export_far");
   writeDetailMap(dir / "map.png", 256, 256);
   for (const double shift : {0.0, 1e5, 1e9}) {

@@ -357,7 +357,7 @@ TEST_CASE("update after an edit equals a full build, bit for bit", "[range_query
   // (an edit can move the map's range: everything is re-encoded); with and without wrap.
   std::vector<Config> configs;
   for (const auto& n : rangeQueryNames()) configs.push_back({n, json::object()});
-  for (const char* n : {"minmax_mipmap", "safety_zones"}) configs.push_back({n, {{"bits", 16}}});
+  for (const auto& n : codedRangeQueries()) configs.push_back({n, {{"bits", 16}}});
   configs.push_back({"rmip", {{"bits", 32}}});
   configs.push_back({"rmip", {{"resolution", 13}}});
   configs.push_back({"rmip", {{"layout", "corners"}, {"compression", 0}}});
