@@ -417,16 +417,21 @@ int runStrategies(bool json) {
     fmt::print("{}\n", j.dump(2));
     return 0;
   }
+  // [cpu] or [cpu, vulkan]: the devices it runs on.
+  const auto devices = [](const nlohmann::json& e) {
+    return fmt::format("[{}]", fmt::join(e.at("devices").get<std::vector<std::string>>(), ", "));
+  };
   for (const char* kind : {"range", "inverter", "splitter"}) {
     fmt::print("{}:\n", kind);
     for (const auto& e : j.at(kind))
-      fmt::print("  {:<14} {}{}\n", e.at("name").get<std::string>(), e.at("summary").get<std::string>(),
+      fmt::print("  {:<14} {:<13} {}{}\n", e.at("name").get<std::string>(), devices(e), e.at("summary").get<std::string>(),
                  e.at("slow_reference").get<bool>() ? " [slow reference]" : "");
   }
   fmt::print("baselines:\n");
   for (const auto& e : j.at("baselines"))
-    fmt::print("  {:<14} {}{}\n", e.at("name").get<std::string>(), e.at("summary").get<std::string>(),
+    fmt::print("  {:<14} {:<13} {}{}\n", e.at("name").get<std::string>(), devices(e), e.at("summary").get<std::string>(),
                e.at("approximate").get<bool>() ? " [approximate]" : "");
+  fmt::print("on vulkan: {}\n", j.at("vulkan").get<std::string>());
   return 0;
 }
 

@@ -36,6 +36,11 @@ struct StrategyTraits {
   // registered in render/embree_scene.cpp). createIntersector refuses it, and the
   // intersectors' conformance suites leave it out (exactBaselines).
   bool builtByScene = false;
+  // Its kernel on the Vulkan path (docs/extending.md, "On the GPU"): the shared source,
+  // relative to the source tree, that the intersection shader compiles for it; empty
+  // where it runs on the CPU only. `oblong info --strategies` and the Vulkan path's
+  // refusal of a combination read it.
+  std::string vulkanKernel = {};
 };
 
 template <typename Base, typename Ctx>

@@ -16,6 +16,7 @@ OBLONG_REGISTER_INVERTER("newton", [](ParamSet& ps, const InverterContext&) -> s
     o.fallback = fb == "cubic";
     return std::make_unique<Newton>(o);
   },
-  StrategyTraits{false, "Newton on the 3x3 system, float or double, cubic fallback (RMIP Sec. 4.1)"});
+  StrategyTraits{.summary = "Newton on the 3x3 system, float or double, cubic fallback (RMIP Sec. 4.1)",
+                 .vulkanKernel = "core/kernels/invert.h"});
 
 }  // namespace oblong

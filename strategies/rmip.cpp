@@ -502,6 +502,7 @@ OBLONG_REGISTER_RANGE_QUERY("rmip", [](ParamSet& ps, const RangeQueryContext& ct
     if (o.bits != 16 && o.bits != 32) fail(ps.where(), "parameter 'bits' = {} is not 16 or 32", o.bits);
     return std::make_unique<Rmip>(ctx.displacement, ctx.needs, o);
   },
-  StrategyTraits{false, "rectangular min-max image pyramid, bounds over any rectangle in four lookups (Thonat et al. 2023, Sec. 5)"});
+  StrategyTraits{.summary = "rectangular min-max image pyramid, bounds over any rectangle in four lookups (Thonat et al. 2023, Sec. 5)",
+                 .vulkanKernel = "core/kernels/rmip_query.h"});
 
 }  // namespace oblong

@@ -16,8 +16,12 @@
 #include "tests/fixtures/traversal_cases.h"
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 
 using namespace oblong;
 using namespace oblong::test;
@@ -81,6 +85,47 @@ TEST_CASE("registry: the tessellated baseline is registered where it is built, f
   CHECK_THROWS_WITH(EmbreeScene(scene, tess), Catch::Contains("strategies.baseline") && Catch::Contains("bogus"));
 }
 
+TEST_CASE("registry: the Vulkan kernels the traits name exist, and the coverage is what they allow",
+          "[registry][vulkan_kernels][unit]") {
+  const nlohmann::json j = strategiesJson();
+  int withKernel = 0;
+  for (const char* role : {"range", "inverter", "splitter", "baselines"})
+    for (const auto& e : j.at(role)) {
+      const std::string name = e.at("name"), kernel = e.at("vulkan_kernel");
+      INFO(role << " " << name << ": " << kernel);
+      CHECK(e.at("devices") == (kernel.empty() ? nlohmann::json{"cpu"} : nlohmann::json{"cpu", "vulkan"}));
+      if (kernel.empty()) continue;
+      ++withKernel;
+      // "FILE" or "FILE (FUNCTION)": the file is in the source tree, the function in it.
+      const std::string file = kernel.substr(0, kernel.find(' '));
+      const std::filesystem::path path = std::filesystem::path(OBLONG_SOURCE_DIR) / file;
+      REQUIRE(std::filesystem::is_regular_file(path));
+      if (kernel.size() > file.size()) {
+        std::ifstream in(path);
+        const std::string text((std::istreambuf_iterator<char>(in)), {});
+        const std::string fn = kernel.substr(file.size() + 2, kernel.size() - file.size() - 3);
+        CHECK(text.find(fn + "(") != std::string::npos);
+      }
+    }
+  CHECK(withKernel >= 4);  // the canonical combination's three and tfdm
+  // The coverage is the product of the roles' kernels, then the baselines with one.
+  for (const StrategyCombination& c : allCombinations()) {
+    const std::string combo = c.config.range + "+" + c.config.inverter + "+" + c.config.splitter;
+    const bool all = !strategyTraits(StrategyKind::Range, c.config.range).vulkanKernel.empty() &&
+                     !strategyTraits(StrategyKind::Inverter, c.config.inverter).vulkanKernel.empty() &&
+                     !strategyTraits(StrategyKind::Splitter, c.config.splitter).vulkanKernel.empty();
+    INFO(combo);
+    CHECK(missingVulkanKernels(c.config).empty() == all);
+    CHECK((vulkanCoverage().find(combo) != std::string::npos) == all);
+  }
+  const TraversalConfig canonical;
+  CHECK(missingVulkanKernels(canonical).empty());
+  TraversalConfig oracle;
+  oracle.baseline = "bruteforce";
+  CHECK(missingVulkanKernels(oracle) == std::vector<std::string>{"bruteforce (baseline)"});
+  CHECK(j.at("vulkan") == vulkanCoverage());
+}
+
 TEST_CASE("registry: the oblong binary's help and strategy list read its registries", "[registry][cli]") {
   const CliRun help = runOblongCli("render --help");
   REQUIRE(help.status == 0);
@@ -106,6 +151,17 @@ TEST_CASE("registry: the oblong binary's help and strategy list read its registr
   CHECK(j.at("baselines")[0].at("name") == "tessellated");
   for (const auto& e : j.at("baselines")) CHECK(help.out.find(e.at("name").get<std::string>()) != std::string::npos);
   CHECK(help.out.find("tessellated | bruteforce") != std::string::npos);
+  // The text list names each strategy's devices and what runs on Vulkan.
+  const CliRun text = runOblongCli("info --strategies");
+  REQUIRE(text.status == 0);
+  for (const char* kind : {"range", "inverter", "splitter", "baselines"})
+    for (const auto& e : j.at(kind)) {
+      const std::string devices = e.at("vulkan_kernel").get<std::string>().empty() ? "[cpu]" : "[cpu, vulkan]";
+      const std::string name = e.at("name");
+      INFO(text.out);
+      CHECK(text.out.find(fmt::format("  {:<14} {:<13} ", name, devices)) != std::string::npos);
+    }
+  CHECK(text.out.find("on vulkan: " + j.at("vulkan").get<std::string>() + "\n") != std::string::npos);
 }
 
 TEST_CASE("registry: an opt-in static instantiation answers as the generic path", "[registry][traversal][unit]") {

@@ -20,6 +20,7 @@
 #include "render/renderer.h"
 #include "render/vulkan/vulkan_scene.h"
 #include "strategies/rmip.h"
+#include "traversal/strategy_catalog.h"
 #include "traversal/traversal.h"
 #include "tests/test_util.h"
 #include "tests/fixtures/traversal_cases.h"
@@ -805,16 +806,23 @@ TEST_CASE("vulkan: bad input gets one clear error", "[vulkan]") {
   const Scene s = loadScene(scenePath("quad_tiled.json"));
   AccelOptions tess;
   tess.traversal.baseline = "tessellated";
-  CHECK_THROWS_WITH(vk::VulkanScene(s, tess), Catch::Contains("--baseline tessellated"));
+  CHECK_THROWS_WITH(vk::VulkanScene(s, tess), Catch::Contains("no Vulkan kernel for tessellated (baseline)"));
+  // A combination is refused by the strategies' traits, naming each missing kernel and
+  // what runs there.
   AccelOptions other;
   other.traversal.range = "minmax_mipmap";
-  CHECK_THROWS_WITH(vk::VulkanScene(s, other), Catch::Contains("rmip+newton+midpoint2d only"));
+  CHECK_THROWS_WITH(vk::VulkanScene(s, other),
+                    Catch::Contains("no Vulkan kernel for minmax_mipmap (range) (what runs there: " + vulkanCoverage() + ")"));
+  other.traversal.inverter = "cubic";
+  other.traversal.splitter = "quadtree";
+  CHECK_THROWS_WITH(vk::VulkanScene(s, other),
+                    Catch::Contains("no Vulkan kernel for minmax_mipmap (range), cubic (inverter), quadtree (splitter)"));
   AccelOptions deep;
   deep.traversal.stackDepth = OBLONG_TRAV_STACK_GPU + 1;  // the CPU takes it, the shaders' array does not
   CHECK_THROWS_WITH(vk::VulkanScene(s, deep), Catch::Contains("strategies.stack_depth"));
   AccelOptions oracle;
   oracle.traversal.baseline = "bruteforce";
-  CHECK_THROWS_WITH(vk::VulkanScene(s, oracle), Catch::Contains("--baseline tfdm only"));
+  CHECK_THROWS_WITH(vk::VulkanScene(s, oracle), Catch::Contains("no Vulkan kernel for bruteforce (baseline)"));
   vulkanTestEnv();
   vk::VulkanScene gpu(s, AccelOptions{});
   Ray r;
@@ -840,6 +848,18 @@ Run runOblong(const std::string& args, const std::filesystem::path& dir) {
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(o), slurp(e)};
 }
 }  // namespace
+
+TEST_CASE("vulkan: a combination without Vulkan kernels is refused by the command in one line", "[vulkan][bad_input]") {
+  vulkanTestEnv();
+  const auto dir = test::scratchDir("vulkan_refusal");
+  const std::string png = (dir / "x.png").string();
+  const Run r = runOblong("render --device vulkan --inverter cubic --splitter quadtree --size 8x8 -q -o " + png, dir);
+  INFO(r.err);
+  CHECK(r.code == 1);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.rfind("oblong: --device vulkan: no Vulkan kernel for cubic (inverter), quadtree (splitter)", 0) == 0);
+  CHECK(!std::filesystem::exists(png));
+}
 
 TEST_CASE("vulkan: oblong trace --device vulkan writes the CPU's hits file", "[vulkan]") {
   vulkanTestEnv();  // inherited by the oblong processes

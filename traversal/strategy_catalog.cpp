@@ -5,6 +5,7 @@
 #include "strategies/splitter.h"
 
 #include <algorithm>
+#include <tuple>
 
 namespace oblong {
 
@@ -62,6 +63,43 @@ std::vector<StrategyCombination> allCombinations() {
   return out;
 }
 
+std::vector<std::string> missingVulkanKernels(const TraversalConfig& cfg) {
+  std::vector<std::string> missing;
+  if (!cfg.baseline.empty()) {
+    if (BaselineRegistry::instance().traits(cfg.baseline).vulkanKernel.empty())
+      missing.push_back(cfg.baseline + " (baseline)");
+    return missing;
+  }
+  const std::tuple<StrategyKind, const std::string&, const char*> parts[] = {
+      {StrategyKind::Range, cfg.range, "range"},
+      {StrategyKind::Inverter, cfg.inverter, "inverter"},
+      {StrategyKind::Splitter, cfg.splitter, "splitter"}};
+  for (const auto& [kind, name, role] : parts)
+    if (strategyTraits(kind, name).vulkanKernel.empty()) missing.push_back(name + " (" + role + ")");
+  return missing;
+}
+
+std::string vulkanCoverage() {
+  std::vector<std::string> runs;
+  for (const StrategyCombination& c : allCombinations())
+    if (missingVulkanKernels(c.config).empty())
+      runs.push_back(c.config.range + "+" + c.config.inverter + "+" + c.config.splitter);
+  for (const std::string& b : baselineNames()) {
+    TraversalConfig cfg;
+    cfg.baseline = b;
+    if (missingVulkanKernels(cfg).empty()) runs.push_back("--baseline " + b);
+  }
+  std::string s;
+  for (const std::string& r : runs) s += (s.empty() ? "" : ", ") + r;
+  return s;
+}
+
+namespace {
+nlohmann::json devicesOf(const StrategyTraits& t) {
+  return t.vulkanKernel.empty() ? nlohmann::json{"cpu"} : nlohmann::json{"cpu", "vulkan"};
+}
+}  // namespace
+
 nlohmann::json strategiesJson() {
   nlohmann::json j;
   const std::pair<const char*, StrategyKind> kinds[] = {
@@ -70,14 +108,22 @@ nlohmann::json strategiesJson() {
     j[key] = nlohmann::json::array();
     for (const std::string& n : strategyNames(kind)) {
       const StrategyTraits& t = strategyTraits(kind, n);
-      j[key].push_back({{"name", n}, {"summary", t.summary}, {"slow_reference", t.slowReference}});
+      j[key].push_back({{"name", n},
+                        {"summary", t.summary},
+                        {"slow_reference", t.slowReference},
+                        {"devices", devicesOf(t)},
+                        {"vulkan_kernel", t.vulkanKernel}});
     }
   }
   j["baselines"] = nlohmann::json::array();
   const BaselineRegistry& reg = BaselineRegistry::instance();
   for (const std::string& n : baselineNames())
-    j["baselines"].push_back(
-        {{"name", n}, {"summary", reg.traits(n).summary}, {"approximate", reg.traits(n).approximate}});
+    j["baselines"].push_back({{"name", n},
+                              {"summary", reg.traits(n).summary},
+                              {"approximate", reg.traits(n).approximate},
+                              {"devices", devicesOf(reg.traits(n))},
+                              {"vulkan_kernel", reg.traits(n).vulkanKernel}});
+  j["vulkan"] = vulkanCoverage();
   const TraversalConfig d;
   j["default"] = {{"range", d.range}, {"inverter", d.inverter}, {"splitter", d.splitter},
                   {"marching_scale", d.marchingScale}, {"inversion_in_traversal", d.inversionInTraversal}};

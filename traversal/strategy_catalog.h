@@ -38,8 +38,18 @@ struct StrategyCombination {
 };
 std::vector<StrategyCombination> allCombinations();
 
-// {"range": [{"name", "summary", "slow_reference"}...], "inverter": [...], "splitter": [...],
-//  "baselines": [{"name", "summary", "approximate"}...], "default": {...}}.
+// The Vulkan path's coverage, read from the traits (StrategyTraits::vulkanKernel): the
+// strategies of `cfg` (its baseline, else its range query, inverter and splitter) that
+// have no Vulkan kernel, each as "NAME (ROLE)"; empty where `cfg` runs there.
+std::vector<std::string> missingVulkanKernels(const TraversalConfig& cfg);
+// The traversal's combinations that run on Vulkan (every kernel present), then the
+// baselines that do ("tfdm"), as one line: "rmip+newton+midpoint2d, --baseline tfdm".
+std::string vulkanCoverage();
+
+// {"range": [{"name", "summary", "slow_reference", "devices", "vulkan_kernel"}...],
+//  "inverter": [...], "splitter": [...], "baselines": [{"name", "summary", "approximate",
+//  "devices", "vulkan_kernel"}...], "default": {...}}; "devices" is ["cpu"] or
+//  ["cpu", "vulkan"].
 nlohmann::json strategiesJson();
 
 }  // namespace oblong

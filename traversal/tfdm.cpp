@@ -419,6 +419,7 @@ std::unique_ptr<Intersector> makeTfdm(ParamSet& params, const BaselineContext& c
 
 OBLONG_REGISTER_BASELINE("tfdm", makeTfdm,
                          StrategyTraits{.summary = "Thonat et al. 2021: texture-space quad-tree over a min-max mipmap, "
-                                                   "node boxes, fixed child order, no early exit (exact)"});
+                                                   "node boxes, fixed child order, no early exit (exact)",
+                                        .vulkanKernel = "core/kernels/tfdm.h"});
 
 }  // namespace oblong

@@ -447,7 +447,7 @@ void processPiece(CurvePoint a, CurvePoint b) {
   bool ok = false;
   for (int e = g_inversionInTraversal ? 0 : 2; e < 3; ++e) {
     bool need;
-    double t;
+    double t = 0.0;  // set on every path that reads it; GCC cannot tell
     if (e < 2) {
       need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
       t = e == 0 ? t0 : t1;

@@ -9,6 +9,7 @@
 #include "core/scene.h"
 #include "render/accel_options.h"
 #include "traversal/lod_per_ray.h"
+#include "traversal/strategy_catalog.h"
 #include "traversal/tfdm_view.h"
 #include "traversal/traversal.h"
 #include "render/vulkan/rmip_layout.h"
@@ -170,12 +171,11 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
   GpuRecords R;
   if (describe) *describe = nlohmann::json::array();
   const TraversalConfig& cfg = opts.traversal;
+  // What runs here is what the strategies' traits name a Vulkan kernel for.
+  if (const auto missing = missingVulkanKernels(cfg); !missing.empty())
+    fail("--device vulkan", "no Vulkan kernel for {} (what runs there: {})", fmt::join(missing, ", "),
+         vulkanCoverage());
   const bool tfdm = cfg.baseline == "tfdm";
-  if (!cfg.baseline.empty() && !tfdm)
-    fail("--device vulkan", "runs the traversal and --baseline tfdm only, not --baseline {}", cfg.baseline);
-  if (!tfdm && (cfg.range != "rmip" || cfg.inverter != "newton" || cfg.splitter != "midpoint2d"))
-    fail("--device vulkan", "runs the canonical configuration rmip+newton+midpoint2d only (asked for {}+{}+{})",
-         cfg.range, cfg.inverter, cfg.splitter);
   // The shader's Newton is the default one (float, tolerance 1e-5, 10 iterations).
   if (!tfdm && !cfg.inverterParams.empty())
     fail("--device vulkan", "runs newton with its default parameters only (asked for {})", cfg.inverterParams.dump());
