@@ -21,12 +21,24 @@ OBLONG_KERNELS_BEGIN
 #define KResult InvResultF
 #define KDOT dotF
 #define KCROSS crossF
-#define KLENGTH lengthF
 #define KFINITE finiteF
 #define KCOPYSIGN copysignF
 #define KCBRT cbrtF
+// The inverter's quotients and roots need not be correctly rounded: what it returns is a
+// claim that makePoint validates with a residual (core/kernels/curve_point.h), so the
+// GPU takes its own float `/` and sqrt here instead of divF and sqrtF, whose correction
+// loops, inlined at each inversion site, were 41 % of the intersection shader. On the CPU
+// and on lavapipe both are IEEE's (the same bits); a GPU whose `/` or sqrt is not
+// correctly rounded may invert to a neighbouring float: other claims, the same hits.
+#ifdef __cplusplus
+#define KLENGTH lengthF
 #define KDIV divF
 #define KSQRT sqrtF
+#else
+#define KLENGTH(v) sqrt(dotF(v, v))
+#define KDIV(a, b) ((a) / (b))
+#define KSQRT sqrt
+#endif
 #define K_DROP_EPS OBLONG_CUBIC_DROP_EPS_F
 #define K_ROOT_TOL OBLONG_CUBIC_ROOT_TOL_F
 #define K_TIE_EPS OBLONG_CUBIC_TIE_EPS_F

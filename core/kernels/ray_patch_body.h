@@ -350,9 +350,21 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
   }
   int ax = g_mAx, mi = 1 - ax;
   for (;;) {
+    // The end of the march, or of the current column.
+    if (!g_mCol && (g_mSa > 0 ? g_mK > g_gHi[ax] : g_mK < g_gLo[ax])) return false;
+    if (g_mCol && !(g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0)) {
+      g_mCol = false;
+      g_mK += g_mSa;
+      continue;
+    }
+    // The first hit found bounds the march: setStop has this one call site, so that its
+    // inversion is inlined once in the shader.
+    if (!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) {
+      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+      return false;
+    }
     if (!g_mCol) {
-      if (g_mSa > 0 ? g_mK > g_gHi[ax] : g_mK < g_gLo[ax]) return false;
-      if ((!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) || pastStop(ax, g_mK)) {
+      if (pastStop(ax, g_mK)) {
         OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
         return false;
       }
@@ -379,25 +391,22 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
       g_mJ1 = min(int(floor(whi + eta)), g_gHi[mi]);
       g_mJ = g_mSm > 0 ? g_mJ0 : g_mJ1;
       g_mCol = true;
-    }
-    if (g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0) {
-      if (!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) {
-        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
-        return false;
-      }
-      if (pastStop(mi, g_mJ)) {
-        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+      if (!(g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0)) {  // no cell in this column
         g_mCol = false;
         g_mK += g_mSa;
         continue;
       }
-      ci = ax == 0 ? g_mK : g_mJ;
-      cj = ax == 0 ? g_mJ : g_mK;
-      g_mJ += g_mSm;
-      return true;
     }
-    g_mCol = false;
-    g_mK += g_mSa;
+    if (pastStop(mi, g_mJ)) {
+      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+      g_mCol = false;
+      g_mK += g_mSa;
+      continue;
+    }
+    ci = ax == 0 ? g_mK : g_mJ;
+    cj = ax == 0 ? g_mJ : g_mK;
+    g_mJ += g_mSm;
+    return true;
   }
   return false;
 }
