@@ -64,13 +64,21 @@ OBLONG_INLINE float dispMicroAt(Maps m, OBLONG_IN(dvec2) s, float scale, float b
   double fi = floor(s.x), fj = floor(s.y);
   int i = int(fi), j = int(fj);
   OBLONG_PRECISE float fx = float(s.x - fi), fy = float(s.y - fj);
-  float h00 = dispRaw(m, i, j), h11 = dispRaw(m, i + 1, j + 1);
+  // The corners (i,j), (i+1,j+1) and (i+1,j) (lower triangle) or (i,j+1) (upper one),
+  // fetched from one call site (in a shader each call site is a copy of the lookup).
+  bool lower = fx >= fy;
+  float h[3];
+  for (int k = 0; k < 3; ++k) {
+    int di = k == 0 ? 0 : k == 1 ? 1 : lower ? 1 : 0, dj = k == 0 ? 0 : k == 1 ? 1 : lower ? 0 : 1;
+    h[k] = dispRaw(m, i + di, j + dj);
+  }
+  float h00 = h[0], h11 = h[1];
   OBLONG_PRECISE float H;
-  if (fx >= fy) {  // lower triangle (i,j), (i+1,j), (i+1,j+1)
-    float h10 = dispRaw(m, i + 1, j);
+  if (lower) {  // lower triangle (i,j), (i+1,j), (i+1,j+1)
+    float h10 = h[2];
     H = h00 + fx * (h10 - h00) + fy * (h11 - h10);
   } else {  // upper triangle (i,j), (i+1,j+1), (i,j+1)
-    float h01 = dispRaw(m, i, j + 1);
+    float h01 = h[2];
     H = h00 + fy * (h01 - h00) + fx * (h11 - h01);
   }
   OBLONG_PRECISE float r = scale * (H + bias);

@@ -308,8 +308,9 @@ OBLONG_INLINE float mcLineHeight(McHeights hs, int type, int c, OBLONG_IN(dvec2)
     i0 = j0 + c, i1 = i0 + 1, j1 = j0 + 1, at = s.y - double(j0);
   }
   float f = float(at);
-  float a = mcRaw(hs, i0, j0);
-  OBLONG_PRECISE float r = a + f * (mcRaw(hs, i1, j1) - a);
+  float e[2];
+  for (int k = 0; k < 2; ++k) e[k] = mcRaw(hs, k == 0 ? i0 : i1, k == 0 ? j0 : j1);  // one call site
+  OBLONG_PRECISE float r = e[0] + f * (e[1] - e[0]);
   return r;
 }
 
@@ -333,7 +334,6 @@ OBLONG_INLINE McVertex mcTVertex(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHei
 // leaves along an edge fanned into slivers of non-zero area (whose normals cancel).
 OBLONG_TEMPLATE1(McHeights)
 OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeights hs, OBLONG_IN(McPV) v, int mask) {
-  if (v.kind == OBLONG_MC_TVERTEX) return mcTVertex(T, E, hs, v.a);
   int edge = -1;
   double t = 0.0;
   float raw = 0.0f;
@@ -343,7 +343,7 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
     dvec2 SA = E.SA[edge];
     OBLONG_PRECISE dvec2 s = SA + t * (E.SB[edge] - SA);
     raw = mcLineHeight(hs, v.lineType, v.lineC, s);
-  } else {
+  } else if (v.kind != OBLONG_MC_TVERTEX) {  // a grid point, maybe on an edge of T
     for (int e = 0; e < 3 && edge < 0; ++e)
       if ((mask >> e & 1) != 0 && mcOrient(E.SA[e], E.SB[e], v.s) == 0.0) {
         dvec2 SA = E.SA[e];
@@ -356,8 +356,13 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
       }
     if (edge < 0) return mcGridVertex(hs, v.a, v.b);
   }
-  if (t == 0.0) return mcTVertex(T, E, hs, E.A[edge]);
-  if (t == 1.0) return mcTVertex(T, E, hs, E.B[edge]);
+  // T's vertices from one call site (in a shader each call site is a copy of the
+  // height lookups it makes).
+  if (v.kind == OBLONG_MC_TVERTEX || t == 0.0 || t == 1.0) {
+    int k = v.a;
+    if (v.kind != OBLONG_MC_TVERTEX) k = t == 0.0 ? E.A[edge] : E.B[edge];
+    return mcTVertex(T, E, hs, k);
+  }
   return mcOnEdge(T, E, edge, t, raw);
 }
 
