@@ -122,8 +122,7 @@ struct Displacement {
   struct LodMaps {
     const HeightMap& level;
     const HeightMap& next;
-    friend float dispLevel(const LodMaps& m, int i, int j) { return m.level.at(i, j); }
-    friend float dispNext(const LodMaps& m, int i, int j) { return m.next.at(i, j); }
+    friend float dispTexel(const LodMaps& m, int next, int i, int j) { return (next ? m.next : m.level).at(i, j); }
   };
 
   // Height of one sample point (grid vertex of the micro-geometry).

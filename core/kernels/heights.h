@@ -5,8 +5,9 @@
 // The texels are each side's own, as in rmip_query.h: a type Maps with functions the
 // includer provides (C++: template parameter; GLSL: a macro naming a type, functions
 // defined after this header, which declares them):
-//   float dispLevel(Maps m, int i, int j)  texel (i, j) of the ray's level (wrapped)
-//   float dispNext(Maps m, int i, int j)   texel (i, j) of the next level (λ per ray)
+//   float dispTexel(Maps m, int next, int i, int j)
+//                                          texel (i, j) of the ray's level (next 0) or
+//                                          of the next level (next 1, a λ per ray), wrapped
 //   float dispRaw(Maps m, int i, int j)    the raw height of sample (i, j) for the ray
 //                                          (dispLodHeight at its blend fraction)
 #ifndef OBLONG_KERNELS_HEIGHTS_H
@@ -17,8 +18,7 @@
 OBLONG_KERNELS_BEGIN
 
 #ifndef __cplusplus
-float dispLevel(Maps m, int i, int j);
-float dispNext(Maps m, int i, int j);
+float dispTexel(Maps m, int next, int i, int j);
 float dispRaw(Maps m, int i, int j);
 #endif
 
@@ -46,11 +46,17 @@ OBLONG_FORCE_INLINE float dispClamp(float v, float lo, float hi) { return v < lo
 // puts in both of its triangles. Minima, maxima and clamps break ties as std:: does.
 OBLONG_TEMPLATE1(Maps)
 OBLONG_INLINE float dispLodHeight(Maps m, int i, int j, float f) {
-  float h = dispLevel(m, i, j);
-  if (f == 0.0f) return h;
+  // Its texels h (level k at (i, j)), p and q (level k + 1 at (a, b) and at the coarse
+  // neighbour), fetched from one call site (in a shader each call site is a copy).
   int a = i >> 1, b = j >> 1;
-  float p = dispNext(m, a, b);
-  float q = ((i | j) & 1) == 0 ? p : dispNext(m, a + (i & 1), b + (j & 1));
+  int n = f == 0.0f ? 1 : ((i | j) & 1) == 0 ? 2 : 3;
+  float v[3];
+  for (int k = 0; k < n; ++k)
+    v[k] = dispTexel(m, k == 0 ? 0 : 1, k == 0 ? i : k == 1 ? a : a + (i & 1), k == 0 ? j : k == 1 ? b : b + (j & 1));
+  float h = v[0];
+  if (n == 1) return h;
+  float p = v[1];
+  float q = n == 2 ? p : v[2];
   OBLONG_PRECISE float mid = 0.5f * (p + q);
   float L = dispClamp(mid, q < p ? q : p, p < q ? q : p);
   OBLONG_PRECISE float w = (1.0f - f) * h + f * L;

@@ -12,8 +12,12 @@
 #include "core/kernels/texels.h"  // wrapIndex
 
 // ---- height map (core/heightmap.h) --------------------------------------------------
-float levelAt(MeshGpu m, int i, int j) {  // HeightMap::at of a record's map
-  return texelAt(m.texelOffset + uint(wrapIndex(j, m.H)) * uint(m.W) + uint(wrapIndex(i, m.W)), m.chunkShift);
+// HeightMap::at of the ray's level (next 0) or of the next level's map: one fetch.
+float levelAt(int next, int i, int j) {
+  uint offset = next == 0 ? g_mesh.texelOffset : g_next.texelOffset;
+  int W = next == 0 ? g_mesh.W : g_next.W, H = next == 0 ? g_mesh.H : g_next.H;
+  int shift = next == 0 ? g_mesh.chunkShift : g_next.chunkShift;
+  return texelAt(offset + uint(wrapIndex(j, H)) * uint(W) + uint(wrapIndex(i, W)), shift);
 }
 // std::min and std::max as the CPU evaluates them (which argument wins a tie).
 float minCpp(float a, float b) { return b < a ? b : a; }
@@ -23,8 +27,7 @@ float maxCpp(float a, float b) { return a < b ? b : a; }
 // per ray.
 #define Maps int
 #include "core/kernels/heights.h"
-float dispLevel(Maps m, int i, int j) { return levelAt(g_mesh, i, j); }
-float dispNext(Maps m, int i, int j) { return levelAt(g_next, i, j); }
+float dispTexel(Maps m, int next, int i, int j) { return levelAt(next, i, j); }
 float mapAt(int i, int j) { return dispLodHeight(0, i, j, g_blend); }
 float dispRaw(Maps m, int i, int j) { return mapAt(i, j); }
 // A λ per ray (PerRayLod::intersect, Displacement::blendOf): the record of level ⌊λ⌋
