@@ -854,6 +854,22 @@ TEST_CASE("bad input: an image that does not fit in memory is refused before any
   CHECK(!fs::exists(png));
 }
 
+namespace {
+// Runs `oblong ARGS` under `ulimit -f 2`, which cuts every write past 2 KiB (EFBIG;
+// oblong ignores SIGXFSZ): one line naming `out`, exit 1, `out` (written "keep" before)
+// unchanged, no temporary left in `dir`.
+void checkCutWrite(const std::string& args, const fs::path& out, const fs::path& dir) {
+  const std::string cmd = fmt::format("bash -c 'ulimit -f 2; exec timeout 60 {} {}' >{} 2>{}", OBLONG_BINARY, args,
+                                      (dir / "out.txt").string(), (dir / "err.txt").string());
+  const int raw = std::system(cmd.c_str());
+  const Run r{WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(dir / "out.txt"), slurp(dir / "err.txt")};
+  checkOneLineError(r, args, {out.string() + ": write failed"});
+  CHECK(slurp(out) == "keep");
+  for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().filename().string().find(".oblong-") == std::string::npos);
+}
+
+}  // namespace
+
 TEST_CASE("bad input: a write cut short (a full device, a file size limit) fails every image writer with one line",
           "[bad_input][cli]") {
   const fs::path dir = test::scratchDir("bad_input_cut_write");
@@ -863,13 +879,7 @@ TEST_CASE("bad input: a write cut short (a full device, a file size limit) fails
     const fs::path out = dir / fmt::format("o.{}", ext);
     write(out, "keep");
     const std::string args = fmt::format("render --size 96x72 --threads 1 -q -o {}", out.string());
-    const std::string cmd = fmt::format("bash -c 'ulimit -f 2; exec timeout 60 {} {}' >{} 2>{}", OBLONG_BINARY, args,
-                                        (dir / "out.txt").string(), (dir / "err.txt").string());
-    const int raw = std::system(cmd.c_str());
-    const Run r{WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(dir / "out.txt"), slurp(dir / "err.txt")};
-    checkOneLineError(r, args, {out.string() + ": write failed"});
-    CHECK(slurp(out) == "keep");
-    for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().filename().string().find(".oblong-") == std::string::npos);
+    checkCutWrite(args, out, dir);
   }
 }
 
@@ -894,14 +904,7 @@ TEST_CASE("bad input: a write cut short fails the heat map, compare, export, tra
   for (const auto& [name, args] : outputs) {
     const fs::path out = dir / name;
     write(out, "keep");
-    // `ulimit -f` cuts every write past 2 KiB (EFBIG; oblong ignores SIGXFSZ).
-    const std::string cmd = fmt::format("bash -c 'ulimit -f 2; exec timeout 60 {} {}' >{} 2>{}", OBLONG_BINARY, args,
-                                        (dir / "out.txt").string(), (dir / "err.txt").string());
-    const int raw = std::system(cmd.c_str());
-    const Run r{WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(dir / "out.txt"), slurp(dir / "err.txt")};
-    checkOneLineError(r, args, {out.string() + ": write failed"});
-    CHECK(slurp(out) == "keep");
-    for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().filename().string().find(".oblong-") == std::string::npos);
+    checkCutWrite(args, out, dir);
   }
 }
 
