@@ -35,6 +35,11 @@ export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 # Leaks inside Debian's libassimp are known and not ours (tests/lsan.supp).
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/tests/lsan.supp:print_suppressions=0}"
+# The targets' scratch files (temp_directory_path) go to a folder of this run, removed at
+# the end: libFuzzer ends a timed run without the targets' static destructors.
+scratch="$(mktemp -d)"
+trap 'rm -rf "$scratch"' EXIT
+export TMPDIR="$scratch"
 status=0
 for t in $targets; do
   corpus="$build/corpus_$t"
