@@ -191,8 +191,9 @@ _STRATEGIES: dict = {}
 
 def strategies(ctx: Context) -> dict:
     """The binary's registered strategies (`oblong info --strategies --json`): per kind
-    ("range", "inverter", "splitter") a list of {name, summary, slow_reference}, and the
-    default configuration. Experiments list strategies from here, never by hand."""
+    ("range", "inverter", "splitter") a list of {name, summary, slow_reference, devices,
+    vulkan_kernel}, the baselines, what runs on Vulkan ("vulkan") and the default
+    configuration. Experiments list strategies from here, never by hand."""
     key = str(ctx.binary)
     if key not in _STRATEGIES:
         out = subprocess.run([key, "info", "--strategies", "--json"], capture_output=True, text=True, check=True,
