@@ -88,13 +88,14 @@ bool isZeroOrBad(const vec3& n) {
 // its area) is summed per distinct position, so vertices split at uv seams (same
 // position, different uv) get one normal. Double accumulation keeps big meshes exact
 // enough. Vertices whose sum vanishes get a zero vector; `used` marks vertices of at
-// least one non-degenerate triangle (for them a zero normal is an error).
-std::vector<vec3> smoothNormals(const Mesh& m, std::vector<bool>& used) {
+// least one non-degenerate triangle (for them a zero normal is an error), `largest` gives
+// each the normal of its own largest triangle.
+std::vector<vec3> smoothNormals(const Mesh& m, std::vector<bool>& used, std::vector<vec3>& largest) {
   std::unordered_map<vec3, uint32_t, PositionHash> group;
   std::vector<uint32_t> groupOf(m.positions.size());
   for (size_t v = 0; v < m.positions.size(); ++v)
     groupOf[v] = group.try_emplace(m.positions[v], uint32_t(group.size())).first->second;
-  std::vector<dvec3> sum(group.size(), dvec3(0.0));
+  std::vector<dvec3> sum(group.size(), dvec3(0.0)), big(m.positions.size(), dvec3(0.0));
   used.assign(m.positions.size(), false);
   for (const glm::uvec3& f : m.triangles) {
     const dvec3 p0(m.positions[f[0]]), p1(m.positions[f[1]]), p2(m.positions[f[2]]);
@@ -103,8 +104,11 @@ std::vector<vec3> smoothNormals(const Mesh& m, std::vector<bool>& used) {
     for (int k = 0; k < 3; ++k) {
       sum[groupOf[f[k]]] += c;
       used[f[k]] = true;
+      if (glm::length(c) > glm::length(big[f[k]])) big[f[k]] = c;
     }
   }
+  largest.resize(m.positions.size());
+  for (size_t v = 0; v < big.size(); ++v) largest[v] = used[v] ? vec3(glm::normalize(big[v])) : vec3(0.0f);
   std::vector<vec3> n(m.positions.size());
   for (size_t v = 0; v < n.size(); ++v) {
     const dvec3 s = sum[groupOf[v]];
@@ -115,28 +119,38 @@ std::vector<vec3> smoothNormals(const Mesh& m, std::vector<bool>& used) {
 }
 
 // Replaces zero or non-finite normals by smooth ones; errors if that still leaves a
-// zero normal on a vertex of a non-degenerate triangle (its triangles' normals cancel).
-// Vertices only used by degenerate triangles get +z: those triangles are never
-// displaced (prepare() rejects them), the normal just has to be unit length.
-void fixNormals(Mesh& m) {
+// zero normal on a vertex of a non-degenerate triangle (its triangles' normals cancel)
+// of a mesh to be displaced (the normal is the displacement's direction). On a plain
+// mesh the normal only shades: such a vertex takes the normal of its largest triangle,
+// and the count is returned (an exported micro-mesh has them where slivers along a base
+// triangle's edge fold back on each other). Vertices only used by degenerate triangles
+// get +z: those triangles are never displaced (prepare() rejects them), the normal just
+// has to be unit length.
+size_t fixNormals(Mesh& m, bool displaced = true) {
   std::vector<size_t> bad;
   for (size_t v = 0; v < m.normals.size(); ++v)
     if (isZeroOrBad(m.normals[v])) bad.push_back(v);
     else m.normals[v] = glm::normalize(m.normals[v]);
-  if (bad.empty()) return;
+  if (bad.empty()) return 0;
   std::vector<bool> used;
-  const std::vector<vec3> smooth = smoothNormals(m, used);
+  std::vector<vec3> largest;
+  const std::vector<vec3> smooth = smoothNormals(m, used, largest);
+  size_t cancelled = 0;
   for (size_t v : bad) {
     if (!isZeroOrBad(smooth[v])) {
       m.normals[v] = smooth[v];
     } else if (!used[v]) {
       m.normals[v] = vec3(0.0f, 0.0f, 1.0f);
+    } else if (!displaced && !isZeroOrBad(largest[v])) {
+      m.normals[v] = largest[v];
+      ++cancelled;
     } else {
       const vec3& p = m.positions[v];
       fail(m.name, "vertex {} at ({}, {}, {}) has a zero normal (the normals of its triangles cancel)", v, p.x,
            p.y, p.z);
     }
   }
+  return cancelled;
 }
 
 // Importers of assimp 5.2 that store v' = 1 - v for a file's v (their formats put v = 0
@@ -317,7 +331,11 @@ void finishMesh(Mesh& m, const MeshLoadOptions& opts) {
     const dvec3 p0(m.positions[f[0]]), p1(m.positions[f[1]]), p2(m.positions[f[2]]);
     if (glm::cross(p1 - p0, p2 - p0) == dvec3(0.0)) why[i] = kZeroArea;
   }
-  fixNormals(m);
+  const size_t cancelled = fixNormals(m, opts.needUVs);
+  if (cancelled > 0 && opts.warn)
+    eprint("oblong: warning: {}: {} vertices whose triangles' normals cancel are shaded with the normal of their "
+           "largest triangle\n",
+           m.name, cancelled);
   if (opts.transform != glm::mat4(1.0f)) transformMesh(m, opts.transform);
   // The frame comes before the float checks, which must see the positions the renderer
   // uses (rounded into the frame). Its box is over the triangles the exact test kept:

@@ -68,9 +68,10 @@ Mesh loadMesh(const std::string& path, const MeshLoadOptions& opts = {});
 // checks run on the recentred positions; degenerate triangles are dropped with one
 // warning line on stderr ("oblong: warning: NAME: skipped K of N degenerate triangles
 // (...)"). Errors (naming m.name): every
-// triangle degenerate, a triangle whose area overflows a float, a vertex or (when
-// needUVs) a triangle interior where the normals cancel, a used vertex beyond
-// kMaxCoordinate after the transform.
+// triangle degenerate, a triangle whose area overflows a float, when needUVs a vertex
+// or a triangle interior where the normals cancel (without needUVs such a vertex is
+// shaded with its largest triangle's normal, with one warning line), a used vertex
+// beyond kMaxCoordinate after the transform.
 void finishMesh(Mesh& m, const MeshLoadOptions& opts);
 
 // Area-weighted smooth normals accumulated per distinct position.
