@@ -353,6 +353,34 @@ std::vector<float> depthOf(const fs::path& exr) {
   return out;
 }
 
+// Renders `sceneA` and the export's scene `sceneB` (each a render command's scene and
+// flags) with the primary integrator at `size` and checks that they hit the same pixels
+// at depths within 1e-5 relative (the traversal works in the mesh's frame, the export in
+// world floats: ulps apart). Returns the second render's stderr.
+std::string checkRendersAlike(const fs::path& dir, const std::string& tag, const std::string& sceneA,
+                              const std::string& sceneB, const std::string& size) {
+  const std::string common = " --size " + size + " --integrator primary -q";
+  const test::CliRun a = test::runOblongCli("render " + sceneA + common + " -o " + (dir / (tag + "_a.png")).string() +
+                                            " --aovs " + (dir / (tag + "_a.exr")).string());
+  INFO(a.err);
+  REQUIRE(a.status == 0);
+  const test::CliRun b = test::runOblongCli("render " + sceneB + common + " -o " + (dir / (tag + "_b.png")).string() +
+                                            " --aovs " + (dir / (tag + "_b.exr")).string());
+  INFO(b.err);
+  REQUIRE(b.status == 0);
+  const std::vector<float> za = depthOf(dir / (tag + "_a.exr")), zb = depthOf(dir / (tag + "_b.exr"));
+  REQUIRE(za.size() == zb.size());
+  size_t hits = 0, differ = 0;
+  for (size_t p = 0; p < za.size(); ++p) {
+    const bool ha = std::isfinite(za[p]), hb = std::isfinite(zb[p]);
+    hits += ha;
+    differ += ha != hb || (ha && std::abs(za[p] - zb[p]) > 1e-5f * za[p]);
+  }
+  CHECK(hits > za.size() / 8);
+  CHECK(differ == 0);
+  return b.err;
+}
+
 }  // namespace
 
 // Far from the origin float world positions (the file's) are coarser than the
@@ -457,29 +485,9 @@ TEST_CASE("export: an OBJ grid with an MTL disp map loads back and renders as th
     scene["camera"] = {{"from", arr(cam.from)}, {"to", arr(cam.to)}, {"up", arr(cam.up)}, {"fov", cam.fovY}};
     const fs::path back = dir / (tag + "_back.json");
     std::ofstream(back) << scene.dump();
-    const std::string common = " --size 40x30 --integrator primary -q";
-    const test::CliRun a = test::runOblongCli("render " + objPath.string() + common + " -o " +
-                                              (dir / (tag + "_a.png")).string() + " --aovs " +
-                                              (dir / (tag + "_a.exr")).string());
-    INFO(a.err);
-    REQUIRE(a.status == 0);
-    const test::CliRun b = test::runOblongCli("render " + back.string() + common + " -o " +
-                                              (dir / (tag + "_b.png")).string() + " --aovs " +
-                                              (dir / (tag + "_b.exr")).string());
-    INFO(b.err);
-    REQUIRE(b.status == 0);
+    const std::string err = checkRendersAlike(dir, tag, objPath.string(), back.string(), "40x30");
     // At most the loader's one line about the zero-area micro-triangles it skipped.
-    CHECK(std::count(b.err.begin(), b.err.end(), '\n') <= 1);
-    const std::vector<float> za = depthOf(dir / (tag + "_a.exr")), zb = depthOf(dir / (tag + "_b.exr"));
-    REQUIRE(za.size() == zb.size());
-    size_t hits = 0, differ = 0;
-    for (size_t p = 0; p < za.size(); ++p) {
-      const bool ha = std::isfinite(za[p]), hb = std::isfinite(zb[p]);
-      hits += ha;
-      differ += ha != hb || (ha && std::abs(za[p] - zb[p]) > 1e-5f * za[p]);
-    }
-    CHECK(hits > za.size() / 8);
-    CHECK(differ == 0);
+    CHECK(std::count(err.begin(), err.end(), '\n') <= 1);
   }
 }
 
@@ -501,26 +509,6 @@ TEST_CASE("export: the shipped scenes load back and render as the scene", "[expo
     const nlohmann::json back = {{"meshes", {{{"file", ply.string()}}}}, {"camera", original.at("camera")}};
     const fs::path backPath = dir / (name + "_back.json");
     std::ofstream(backPath) << back.dump();
-    const std::string common = " --size 64x48 --integrator primary -q";
-    const test::CliRun a = test::runOblongCli("render " + scenePath + " --lod 3" + common + " -o " +
-                                              (dir / (name + "_a.png")).string() + " --aovs " +
-                                              (dir / (name + "_a.exr")).string());
-    REQUIRE(a.status == 0);
-    const test::CliRun b = test::runOblongCli("render " + backPath.string() + common + " -o " +
-                                              (dir / (name + "_b.png")).string() + " --aovs " +
-                                              (dir / (name + "_b.exr")).string());
-    INFO(b.err);
-    REQUIRE(b.status == 0);
-    const std::vector<float> za = depthOf(dir / (name + "_a.exr")), zb = depthOf(dir / (name + "_b.exr"));
-    REQUIRE(za.size() == zb.size());
-    size_t hits = 0, differ = 0;
-    for (size_t p = 0; p < za.size(); ++p) {
-      const bool ha = std::isfinite(za[p]), hb = std::isfinite(zb[p]);
-      hits += ha;
-      // The traversal works in the mesh's frame, the export in world floats: ulps apart.
-      differ += ha != hb || (ha && std::abs(za[p] - zb[p]) > 1e-5f * za[p]);
-    }
-    CHECK(hits > za.size() / 8);
-    CHECK(differ == 0);
+    checkRendersAlike(dir, name, scenePath + " --lod 3", backPath.string(), "64x48");
   }
 }
