@@ -42,10 +42,7 @@ struct Quantizer16 {
   }
   bool covers(const Interval& v) const { return v.isEmpty() || (v.lo >= base && v.hi <= decode(65535)); }
 
-  float decode(uint32_t code) const {
-    const float scaled = float(code) * step;
-    return base + scaled;
-  }
+  float decode(uint32_t code) const { return shared::decodeCode16(base, step, code); }
   // Largest code whose value is <= v (v >= base), smallest code whose value is >= v.
   uint32_t codeBelow(float v) const {
     const float c = (v - base) * invStep;  // a guess, corrected by the loops

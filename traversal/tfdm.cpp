@@ -36,6 +36,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 
 namespace oblong {
 
@@ -47,11 +48,6 @@ OBLONG_STAT_COUNTER("tfdm/Leaves", tfLeaves);
 OBLONG_STAT_COUNTER("tfdm/MicroTriangles", tfMicroTris);
 
 namespace {
-
-int64_t wrap64(int64_t i, int64_t n) {
-  const int64_t r = i % n;
-  return r < 0 ? r + n : r;
-}
 
 // The min-max mipmap over the micro-geometry's cells. Level 0 holds, per cell (i, j),
 // the [min, max] of its four corner samples (i..i+1, j..j+1, wrapped): every
@@ -113,29 +109,9 @@ class CellPyramid {
   // Raw [min, max] over cells [x·2^L, (x+1)·2^L) × [y·2^L, (y+1)·2^L) (absolute cell
   // indices, unwrapped).
   Interval node(int L, int64_t x, int64_t y) const {
-    const int s = storedTop();
-    if (L <= s) {
-      const ivec2 d = dims_[L];
-      const size_t at = size_t(wrap64(y, d.y)) * d.x + size_t(wrap64(x, d.x));
-      return bits_ == 16 ? q_.decodePair(codes_[L][at]) : levels_[L][at];
-    }
-    if (folds(L)) {
-      const int k = L - s;
-      const ivec2 d = dims_[s];
-      const int64_t nx = std::min<int64_t>(int64_t(1) << k, d.x), ny = std::min<int64_t>(int64_t(1) << k, d.y);
-      Interval r;
-      uint32_t c = kEmpty16;  // codes are joined and decoded once
-      for (int64_t j = 0; j < ny; ++j)
-        for (int64_t i = 0; i < nx; ++i) {
-          const size_t at = size_t(wrap64((y << k) + j, d.y)) * d.x + size_t(wrap64((x << k) + i, d.x));
-          if (bits_ == 16) {
-            c = join16(c, codes_[s][at]);
-          } else {
-            const Interval& v = levels_[s][at];
-            r.lo = std::min(r.lo, v.lo), r.hi = std::max(r.hi, v.hi);
-          }
-        }
-      return bits_ == 16 ? q_.decodePair(c) : r;
+    if (folds(L)) {  // core/kernels/tfdm.h, as the Vulkan path reads it
+      const vec2 v = shared::tfdmNode(*this, bits_, storedTop(), L, int(x), int(y));
+      return {v.x, v.y};
     }
     // Samples x·2^L .. (x+1)·2^L inclusive (the cells' far corners); clamped to int, a
     // range wider than the map is the whole map's anyway.
@@ -145,6 +121,18 @@ class CellPyramid {
     const int64_t x1 = std::min((x + 1) << L, x0 + W), y1 = std::min((y + 1) << L, y0 + H);
     return upper_->rawRange(SampleRange{clampI(x0), clampI(y0), clampI(x1), clampI(y1)});
   }
+  // The stored pyramid as core/kernels/tfdm.h's tfdmNode reads it (TfdmPyr).
+  friend ivec2 tfdmDims(const CellPyramid& p, int L) { return p.dims_[L]; }
+  friend uint32_t tfdmCode(const CellPyramid& p, int L, uint32_t at) { return p.codes_[L][at]; }
+  friend vec2 tfdmPair(const CellPyramid& p, int L, uint32_t at) {
+    const Interval& v = p.levels_[L][at];
+    return vec2(v.lo, v.hi);
+  }
+  friend vec2 tfdmDecode(const CellPyramid& p, uint32_t codes) {
+    const Interval v = p.q_.decodePair(codes);
+    return vec2(v.lo, v.hi);
+  }
+
   size_t bytes() const {
     size_t b = 0;
     for (const auto& l : levels_) b += l.capacity() * sizeof(Interval);
@@ -205,6 +193,44 @@ struct Roots {
     r.y0 = c.y0 >> r.level, r.y1 = c.y1 >> r.level;
     return r;
   }
+};
+
+// One ray against one triangle: the traversal of core/kernels/tfdm_body.h (the Vulkan
+// shader's own code) with the CPU's hooks: the pyramid, the boxes in the frame X, the
+// closest hit and the micro-cells (built at the first leaf).
+struct TfdmRay : shared::TfdmLoop<TfdmRay> {
+  TfdmRay(const CellPyramid& pyr, const Displacement& d, const TextureFrame& X, const DisplacedTriangle& T,
+          const Ray& r, double mMin, double boxPad, double tAbs)
+      : pyr(pyr), d(d), X(X), T(T), r(r), wr(r), mMin(mMin), boxPad(boxPad), tAbs(tAbs) {}
+
+  double slack(double t) const { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tAbs; }
+  vec2 tfdmHeights(int L, int x, int y) const {
+    const Interval h = d.toHeight(pyr.node(L, x, y));
+    return vec2(h.lo, h.hi);
+  }
+  void tfdmBox(const dvec2& lo, const dvec2& hi, const vec2& h, dvec3& blo, dvec3& bhi) const {
+    shared::boxOverRect(X.Pc, X.PX, X.PY, X.Nc, X.NX, X.NY, mMin, lo, hi, h.x, h.y, boxPad, blo, bhi);
+  }
+  double tfdmLimit() const {
+    return best.found ? double(best.t) + slack(best.t) : double(r.tmax) + slack(r.tmax);
+  }
+  int tfdmLeaf(int x, int y) {
+    if (!cells) cells.emplace(T, d);
+    MicroTriangle buf[MicroCells::kMaxPerCell];
+    const int k = cells->cell(x, y, buf);
+    for (int q = 0; q < k; ++q) best.test(wr, buf[q], r.tmin, r.tmax);
+    return k;
+  }
+
+  const CellPyramid& pyr;
+  const Displacement& d;
+  const TextureFrame& X;
+  const DisplacedTriangle& T;
+  const Ray& r;
+  const WatertightRay wr;
+  double mMin, boxPad, tAbs;
+  ClosestHit best;
+  std::optional<MicroCells> cells;
 };
 
 class Tfdm final : public TfdmIntersector {
@@ -273,79 +299,24 @@ class Tfdm final : public TfdmIntersector {
     const double boxPad =
         worldBoxes_ ? m.boxPad : TextureFrame::pad(m.boxPad, maxO + maxAbsVertex(T) + std::abs(P.a) + std::abs(P.b));
     const double tSlackAbs = OBLONG_TRAV_T_ABS_PADS * boxPad / glm::length(D);
-    auto slack = [&](double t) { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tSlackAbs; };
     const dvec2 uvLo = d.toSample(T.uvBox.lo) - dvec2(F.origin), uvHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
     const double mMin = double(T.minNormalLength);
     // T's uv triangle in sample coordinates, with the inside sign of each edge.
     dvec2 S[3];
     for (int k = 0; k < 3; ++k) S[k] = d.toSample(T.t[k]);
-    const double sigma = shared::tfdmSigma(S[0], S[1], S[2]);
-    // Child order: the child nearest the ray's start first, by the signs of its
-    // texture-space direction.
+    // Child order: from the signs of the ray's texture-space direction.
     const dvec2 dl = approxDirLocal(F, D);
-    const int ax = dl.x < 0 ? 1 : 0, ay = dl.y < 0 ? 1 : 0;
-    const int order[4][2] = {{ax, ay}, {ax, 1 - ay}, {1 - ax, ay}, {1 - ax, 1 - ay}};
-
-    struct Node {
-      int x, y, level;
-    };
-    constexpr int kStack = OBLONG_TFDM_STACK;
-    Node stack[kStack];
-    int sp = 0;
-    const Roots& R = roots_[prim];
-    // Roots pushed so that the first in the fixed order is popped first.
-    for (int k = 3; k >= 0; --k) {
-      const int x = order[k][0] ? R.x1 : R.x0, y = order[k][1] ? R.y1 : R.y0;
-      if (k > 0) {  // roots repeat when the triangle spans one node on an axis
-        bool dup = false;
-        for (int q = 0; q < k; ++q)
-          dup |= (order[q][0] ? R.x1 : R.x0) == x && (order[q][1] ? R.y1 : R.y0) == y;
-        if (dup) continue;
-      }
-      stack[sp++] = {x, y, R.level};
-    }
-
-    ClosestHit best;
-    const WatertightRay wr(r);
-    bool cellsReady = false;
-    alignas(MicroCells) unsigned char mcRaw[sizeof(MicroCells)];
+    TfdmRay tr(*pyr_, d, X, T, r, mMin, boxPad, tSlackAbs);
+    shared::TfdmWork w;
+    tr.tfdmTraverse(ivec2(cr.x0, cr.y0), ivec2(cr.x1, cr.y1), F.origin, S[0], S[1], S[2], uvLo, uvHi, dl, Ob, invDb,
+                    r.tmin - tr.slack(r.tmin), w);
+    if (w.overflow) fail("tfdm", "traversal stack overflow");  // cannot happen: depth <= 94
     RayCounters local;
-    while (sp > 0) {
-      const Node n = stack[--sp];
-      // The node's cells within T's cell range.
-      ivec2 clo, chi;
-      if (!shared::tfdmNodeCells(n.x, n.y, n.level, ivec2(cr.x0, cr.y0), ivec2(cr.x1, cr.y1), clo, chi)) continue;
-      const int cx0 = clo.x, cy0 = clo.y, cx1 = chi.x, cy1 = chi.y;
-      if (shared::tfdmOutside(S[0], S[1], S[2], sigma, double(cx0), double(cy0), double(cx1 + 1), double(cy1 + 1))) {
-        OBLONG_STAT_INC(tfOutside);
-        continue;
-      }
-      ++local.boxes;
-      ++local.rangeQueries;
-      const Interval h = d.toHeight(pyr_->node(n.level, n.x, n.y));
-      const dvec2 lo = glm::max(dvec2(double(cx0 - F.origin.x), double(cy0 - F.origin.y)), uvLo);
-      const dvec2 hi = glm::min(dvec2(double(cx1 + 1 - F.origin.x), double(cy1 + 1 - F.origin.y)), uvHi);
-      const BoxD box = boxOverRect(X, mMin, lo, hi, h.lo, h.hi, boxPad);
-      double t0 = r.tmin - slack(r.tmin);
-      double t1 = best.found ? double(best.t) + slack(best.t) : double(r.tmax) + slack(r.tmax);
-      box.clip(Ob, invDb, t0, t1);
-      if (!(t0 <= t1)) continue;
-      if (n.level == 0) {
-        ++local.cellsMarched;
-        if (!cellsReady) {
-          new (mcRaw) MicroCells(T, d);
-          cellsReady = true;
-        }
-        MicroTriangle buf[MicroCells::kMaxPerCell];
-        const int k = reinterpret_cast<const MicroCells*>(mcRaw)->cell(n.x, n.y, buf);
-        local.microTriangles += k;
-        for (int q = 0; q < k; ++q) best.test(wr, buf[q], r.tmin, r.tmax);
-        continue;
-      }
-      if (sp + 4 > kStack) fail("tfdm", "traversal stack overflow at level {}", n.level);  // cannot happen: depth ≤ 94
-      for (int k = 3; k >= 0; --k)
-        stack[sp++] = {2 * n.x + order[k][0], 2 * n.y + order[k][1], n.level - 1};
-    }
+    local.boxes = local.rangeQueries = w.boxes;
+    local.cellsMarched = w.leaves;
+    local.microTriangles = w.microTris;
+    OBLONG_STAT_ADD(tfOutside, w.outside);
+    const ClosestHit& best = tr.best;
     c += local;
     OBLONG_STAT_ADD(tfNodes, local.boxes);
     OBLONG_STAT_ADD(tfLeaves, local.cellsMarched);

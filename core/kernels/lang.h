@@ -44,6 +44,7 @@ using glm::dvec3;
 using glm::ivec2;
 using glm::vec2;
 using glm::vec3;
+using glm::ivec3;
 using glm::ivec4;
 using glm::bvec2;
 using uint = unsigned int;
@@ -65,6 +66,7 @@ inline bool isinfD(double x) { return std::isinf(x); }
 inline double copysignD(double m, double s) { return std::copysign(m, s); }
 constexpr double kInfD = std::numeric_limits<double>::infinity();
 constexpr float kNaNF = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInfF = std::numeric_limits<float>::infinity();
 // Float scalars: exact matches, so that float arithmetic stays float (a double overload
 // would promote the whole expression).
 inline float min(float a, float b) { return b < a ? b : a; }
@@ -124,6 +126,7 @@ inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
 
 #define kInfD double(uintBitsToFloat(0x7f800000u))
 #define kNaNF uintBitsToFloat(0x7fc00000u)
+#define kInfF uintBitsToFloat(0x7f800000u)
 bool finiteD(double x) { return !isinf(x) && !isnan(x); }
 bool isinfD(double x) { return isinf(x); }
 double copysignD(double m, double s) {  // std::copysign

@@ -16,8 +16,7 @@
 #include "core/kernels/curve_point.h"
 #include "core/kernels/invert.h"
 #include "core/kernels/ray_patch.h"
-
-#define kInfF uintBitsToFloat(0x7f800000u)
+#include "core/kernels/quantize16.h"
 
 // ---- the closest hit (ClosestHit) ------------------------------------------------------
 bool g_found;
@@ -30,12 +29,7 @@ vec3 g_hb;
 #define RmipAccess MeshGpu
 #define RmipAcc vec2
 #include "core/kernels/rmip_query.h"
-// Quantizer16::decode, unfused as on the CPU.
-float rmipDecode(MeshGpu m, uint code) {
-  precise float scaled = float(code) * m.rmipStep;
-  precise float v = m.rmipBase + scaled;
-  return v;
-}
+float rmipDecode(MeshGpu m, uint code) { return decodeCode16(m.rmipBase, m.rmipStep, code); }
 RmipLayerRef rmipLayer(MeshGpu m, int index) {
   ivec4 L = rmipLayers[m.rmipLayers + uint(index)];  // offset, nx, shiftX, shiftY
   return RmipLayerRef(uint(L.x), L.y, L.z, L.w);
