@@ -6,6 +6,6 @@ OBLONG_REGISTER_SPLITTER("midpoint2d", [](ParamSet&, const SplitterContext&) -> 
     return std::make_unique<Midpoint2D>();
   },
   StrategyTraits{.summary = "split the longer side of the rectangle in the middle (RMIP Sec. 4.3, Fig. 5c)",
-                 .vulkanKernel = "render/vulkan/shaders/traversal.glsl (rpSplit)"});
+                 .vulkanKernel = "core/kernels/midpoint2d.h"});
 
 }  // namespace oblong

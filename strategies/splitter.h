@@ -30,6 +30,7 @@
 #pragma once
 
 #include "core/kernels/curve_point.h"
+#include "core/kernels/midpoint2d.h"
 #include "core/math.h"
 #include "core/registry.h"
 
@@ -104,18 +105,14 @@ inline bool strictlyBetween(const CurvePiece& p, int axis, double c) {
   const double x0 = std::min(p.a.uv[axis], p.b.uv[axis]), x1 = std::max(p.a.uv[axis], p.b.uv[axis]);
   return c > x0 && c < x1;
 }
-// Crossing of the line in the middle of the longer side, else of the other side.
+// Crossing of the line in the middle of the longer side, else of the other side
+// (core/kernels/midpoint2d.h, as the Vulkan shader cuts).
 template <typename Ctx>
 inline bool middleCrossing(const CurvePiece& p, Ctx& ctx, CurvePoint& m) {
-  const dvec2 lo = p.lo(), hi = p.hi();
-  const int first = longerAxis(p);
   for (int k = 0; k < 2; ++k) {
-    const int axis = k == 0 ? first : 1 - first;
-    // The middle of the rectangle, moved inside the endpoints' range if the pads put it
-    // outside (the curve must cross the line).
-    double c = 0.5 * (lo[axis] + hi[axis]);
-    if (!strictlyBetween(p, axis, c)) c = 0.5 * (p.a.uv[axis] + p.b.uv[axis]);
-    if (strictlyBetween(p, axis, c) && ctx.crossing(p, axis, c, m)) return true;
+    int axis;
+    double c;
+    if (shared::midpointLine(p.a, p.b, k, axis, c) && ctx.crossing(p, axis, c, m)) return true;
   }
   return false;
 }

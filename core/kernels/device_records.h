@@ -8,11 +8,16 @@
 #ifndef OBLONG_VULKAN_SHARED_H
 #define OBLONG_VULKAN_SHARED_H
 
+#include "core/kernels/curve_point.h"  // ClaimBounds
+#include "core/kernels/patch_math.h"   // PatchFrame
+
 #ifdef __cplusplus
 #include <glm/glm.hpp>
 
 #include <cstdint>
 namespace oblong::vkgpu {
+using shared::ClaimBounds;
+using shared::PatchFrame;
 using glm::dvec2;
 using glm::dvec3;
 using glm::ivec2;
@@ -79,22 +84,19 @@ struct CountersGpu {
 // MicroCells reads (traversal/traversal_mesh.h, psi.h, core/kernels/microcells.h),
 // precomputed on the host by the very code the CPU runs.
 struct TriGpu {
-  // LocalFrame: P = Pc + PX X + PY Y, N = Nc + NX X + NY Y over local sample coordinates.
-  dvec3 Pc, PX, PY, Nc, NX, NY;
+  PatchFrame F;             // LocalFrame (the driver's g_F)
+  ClaimBounds claim;        // PrismParams' bounds on the claims' errors (the driver's g_claim)
   dvec3 N13;                // F.N(1/3, 1/3) (the driver's dirLocal)
-  dvec3 p0d, e1, e2, n0d, f1, f2;  // F.P(b) = p0 + e1 u + e2 v, F.N(b) = n0 + f1 u + f2 v
   dvec3 boxLo, boxHi;       // exact prism box, unpadded (Prism::exact(T, a, b).bounds())
   dvec3 boxPadLo, boxPadHi; // TraversalMesh::prismBoxes (padded for origins within budget)
   dvec3 infPadLo, infPadHi; // TraversalMesh::inflatedBoxes (padded likewise; missesPrism)
   dvec3 obbAxis[5];          // TraversalMesh::obbs (PrismOBB: kAxes slabs; missesPrism)
   double obbLo[5], obbHi[5];
-  dvec2 bc, bX, bY;         // barycentrics (u, v) = bc + bX X + bY Y
-  dvec2 sc, sU, sV;         // local sample coordinates (X, Y) = sc + sU u + sV v
   dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates
   dvec2 S[3];               // vertices in (absolute) sample coordinates (mcEdges' S)
-  dvec2 kb, kxy, eps;       // PrismParams: residual bounds and the cell dilation ε
+  dvec2 eps;                // PrismParams: the cell dilation ε
   double vertexErr, a, b, budget, budgetPad, maxP, minNormalLength;  // budgetPad: TraversalMesh::budgetPad
-  double inflateB, inflateS, ks, domainB, domainS0, domainS1;
+  double inflateB, inflateS;
   // TraversalMesh::texFrames (the boxes' frame: axes, and P and N in it),
   // texPrismBoxes (unpadded) and texPrismMag.
   dvec3 texAxis[3];

@@ -16,6 +16,7 @@
 #include "core/kernels/curve_point.h"
 #include "core/kernels/invert.h"
 #include "core/kernels/ray_patch.h"
+#include "core/kernels/midpoint2d.h"
 #include "core/kernels/quantize16.h"
 
 // ---- the closest hit (ClosestHit) ------------------------------------------------------
@@ -117,7 +118,7 @@ void rpInflatedBox(out dvec3 lo, out dvec3 hi) {
   double maxO = maxNormO();
   bool pre = maxO <= TRI.budget;
   double rayErr = rayError(TRI.maxP, pre ? TRI.budget : maxO, TRI.a, TRI.b);
-  double extraB = rayExtraB(TRI.kb, rayErr), extraS = rayExtraS(TRI.ks, rayErr);
+  double extraB = rayExtraB(TRI.claim.kb, rayErr), extraS = rayExtraS(TRI.claim.ks, rayErr);
   g_P = prismInflated(g_F, TRI.a - TRI.inflateS - extraS, TRI.b + TRI.inflateS + extraS, TRI.inflateB + extraB);
   prismBox(g_P, lo, hi);  // Prism::bounds(), padded
   precise double ppad = pre ? TRI.vertexErr + rayErr : g_boxPad;
@@ -144,18 +145,14 @@ void testMicro(McVertex v0, McVertex v1, McVertex v2) {
 
 
 // midpoint2d (strategies/midpoint2d.h): the crossing with the middle of the longer side,
-// else of the other side (split::middleCrossing), else the t-midpoint by inversion.
+// else of the other side (core/kernels/midpoint2d.h), else the t-midpoint by inversion.
 int rpSplit(CurvePoint a, CurvePoint b, out CurvePoint m, out double t) {
   m = a;
   t = 0.5 * (a.t + b.t);
-  dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
-  dvec2 ext = hi - lo;
-  int first = ext.x >= ext.y ? 0 : 1;
   for (int k = 0; k < 2; ++k) {
-    int axis = k == 0 ? first : 1 - first;
-    precise double c = 0.5 * (lo[axis] + hi[axis]);
-    if (!strictlyBetween(a, b, axis, c)) c = 0.5 * (a.uv[axis] + b.uv[axis]);
-    if (strictlyBetween(a, b, axis, c) && crossingAt(a, b, axis, c, m)) return 1;
+    int axis;
+    double c;
+    if (midpointLine(a, b, k, axis, c) && crossingAt(a, b, axis, c, m)) return 1;
   }
   return 2;
 }
@@ -179,32 +176,15 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
   g_sbLo = TRI.sbLo;
   g_sbHi = TRI.sbHi;
   g_origin = TRI.origin;
-  g_F.bc = TRI.bc;
-  g_F.bX = TRI.bX;
-  g_F.bY = TRI.bY;
-  g_F.sc = TRI.sc;
-  g_F.sU = TRI.sU;
-  g_F.sV = TRI.sV;
-  g_F.p0 = TRI.p0d;
-  g_F.e1 = TRI.e1;
-  g_F.e2 = TRI.e2;
-  g_F.n0 = TRI.n0d;
-  g_F.f1 = TRI.f1;
-  g_F.f2 = TRI.f2;
-  g_F.Pc = TRI.Pc;
-  g_F.PX = TRI.PX;
-  g_F.PY = TRI.PY;
-  g_F.Nc = TRI.Nc;
-  g_F.NX = TRI.NX;
-  g_F.NY = TRI.NY;
+  g_F = TRI.F;
   g_N13 = TRI.N13;
-  g_claim = ClaimBounds(TRI.domainB, TRI.domainS0, TRI.domainS1, TRI.kb, TRI.ks, TRI.kxy);
+  g_claim = TRI.claim;
   g_wellPosed = TRI.wellPosed != 0;
   g_marchingScale = g_mesh.marchingScale;
   g_stackDepth = g_mesh.stackDepth;
   g_inversionInTraversal = g_mesh.inversionInTraversal != 0;
   double maxO = maxNormO();
-  rpInit(TRI.maxP, maxO, TRI.a, TRI.b, TRI.vertexErr, TRI.eps, TRI.kxy, lengthD(g_D));
+  rpInit(TRI.maxP, maxO, TRI.a, TRI.b, TRI.vertexErr, TRI.eps, TRI.claim.kxy, lengthD(g_D));
   bool pre = maxO <= TRI.budget;
   if (pre) {  // TraversalMesh::prismBoxes, padded for the budget
     g_boxLo = TRI.boxPadLo;
