@@ -79,6 +79,11 @@ std::vector<std::string> missingVulkanKernels(const TraversalConfig& cfg) {
   return missing;
 }
 
+std::string vulkanIntersectorKernel(const TraversalConfig& cfg) {
+  return cfg.baseline.empty() ? strategyTraits(StrategyKind::Range, cfg.range).vulkanKernel
+                              : BaselineRegistry::instance().traits(cfg.baseline).vulkanKernel;
+}
+
 std::string vulkanCoverage() {
   std::vector<std::string> runs;
   for (const StrategyCombination& c : allCombinations())

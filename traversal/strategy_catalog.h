@@ -42,6 +42,10 @@ std::vector<StrategyCombination> allCombinations();
 // strategies of `cfg` (its baseline, else its range query, inverter and splitter) that
 // have no Vulkan kernel, each as "NAME (ROLE)"; empty where `cfg` runs there.
 std::vector<std::string> missingVulkanKernels(const TraversalConfig& cfg);
+// The kernel that chooses `cfg`'s intersection program on Vulkan: its baseline's
+// (StrategyTraits::vulkanKernel), else its range query's; render/vulkan/records.cpp maps
+// it to the records and the shader.
+std::string vulkanIntersectorKernel(const TraversalConfig& cfg);
 // The traversal's combinations that run on Vulkan (every kernel present), then the
 // baselines that do ("tfdm"), as one line: "rmip+newton+midpoint2d, --baseline tfdm".
 std::string vulkanCoverage();

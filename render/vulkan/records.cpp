@@ -118,7 +118,6 @@ void appendTfdm(GpuRecords& R, MeshGpu& m, const Intersector& is, const Mesh& me
          "map stores levels 0..{} and its triangles' roots reach level {}, which the CPU answers with a "
          "minmax_mipmap",
          tm.disp.map->width(), tm.disp.map->height(), v.dims.size() - 1, v.topLevel);
-  m.method = OBLONG_METHOD_TFDM;
   m.triOffset = uint32_t(R.tris.size());
   m.W = tm.disp.map->width(), m.H = tm.disp.map->height();
   m.sampleOffset = float(tm.disp.sampleOffset);
@@ -137,6 +136,33 @@ void appendTfdm(GpuRecords& R, MeshGpu& m, const Intersector& is, const Mesh& me
   if (first > size_t(INT32_MAX)) fail("--device vulkan", "tfdm's pyramid exceeds the 32-bit offsets of the GPU layout");
   R.rmipBytes += first * perNode * sizeof(uint32_t);
   appendTriangles(R, m, tm, is, mesh);
+}
+
+void appendCanonical(GpuRecords& R, MeshGpu& m, const Intersector& is, const Mesh& mesh) {
+  appendTraversal(R, m, is, is, mesh);
+}
+
+// The traversals the Vulkan path runs, keyed by the kernel that chooses them
+// (vulkanIntersectorKernel: a baseline's trait, else the range query's): the records'
+// method (MeshGpu::method, which selects the runner's intersection shader) and how their
+// records are made. A new GPU traversal is a row here and its shader in the runner's
+// table (runner.cpp, kPrograms).
+struct GpuMethod {
+  std::string_view kernel;
+  int method;
+  void (*append)(GpuRecords&, MeshGpu&, const Intersector&, const Mesh&);
+};
+constexpr GpuMethod kMethods[] = {
+    {"core/kernels/rmip_query.h", OBLONG_METHOD_CANONICAL, appendCanonical},
+    {"core/kernels/tfdm.h", OBLONG_METHOD_TFDM, appendTfdm},
+};
+
+const GpuMethod& methodFor(const TraversalConfig& cfg) {
+  const std::string kernel = vulkanIntersectorKernel(cfg);
+  for (const GpuMethod& M : kMethods)
+    if (M.kernel == kernel) return M;
+  fail("--device vulkan", "internal: no GPU traversal for the kernel '{}' ({})", kernel,
+       cfg.baseline.empty() ? cfg.range : cfg.baseline);
 }
 
 // Appends the map's texels and the triangles of `tm` with their boxes from `boxes`.
@@ -173,9 +199,9 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
   if (const auto missing = missingVulkanKernels(cfg); !missing.empty())
     fail("--device vulkan", "no Vulkan kernel for {} (what runs there: {})", fmt::join(missing, ", "),
          vulkanCoverage());
-  const bool tfdm = cfg.baseline == "tfdm";
+  const GpuMethod& method = methodFor(cfg);
   // The shader's Newton is the default one (float, tolerance 1e-5, 10 iterations).
-  if (!tfdm && !cfg.inverterParams.empty())
+  if (method.method == OBLONG_METHOD_CANONICAL && !cfg.inverterParams.empty())
     fail("--device vulkan", "runs newton with its default parameters only (asked for {})", cfg.inverterParams.dump());
 
   // Host-side records, built with the CPU's own code (createIntersector).
@@ -194,6 +220,7 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
     const Mesh& mesh = sm.mesh;
     MeshGpu& m = meshes[mi];
     m.origin = mesh.origin;
+    m.method = method.method;
     R.baseTriangles += mesh.triangles.size();
     if (!sm.displacement) {
       m.indexOffset = uint32_t(plainIndex.size());
@@ -242,10 +269,8 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
       }
       m = levels[first - scene.meshes.size()];
       m.lodLevels = int(K + 1), m.lodFirst = first, m.lodNext = -1;
-    } else if (tfdm) {
-      appendTfdm(R, m, *is, mesh);
     } else {
-      appendTraversal(R, m, *is, *is, mesh);
+      method.append(R, m, *is, mesh);
     }
     if (R.texels.size() > size_t(UINT32_MAX) || R.rmipData.size() > size_t(INT32_MAX))
       fail("--device vulkan", "the scene's maps exceed the 32-bit offsets of the GPU layout");

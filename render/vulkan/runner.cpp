@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <iterator>
 #include <memory>
 #include <mutex>
 
@@ -47,6 +48,21 @@ const uint32_t kRint[] = {
 const uint32_t kTfdmRint[] = {
 #include "tfdm.rint.inc"
 };
+// The intersection shader of each traversal the records describe (MeshGpu::method, set
+// by records.cpp from the strategies' traits) and the name of its pyramid in the memory
+// report.
+struct IntersectionProgram {
+  int method;
+  const uint32_t* code;
+  size_t bytes;
+  const char* pyramid;
+};
+const IntersectionProgram kPrograms[] = {
+    {OBLONG_METHOD_CANONICAL, kRint, sizeof kRint, "vulkan/rmip_layers"},
+    {OBLONG_METHOD_TFDM, kTfdmRint, sizeof kTfdmRint, "vulkan/tfdm_mipmap"},
+};
+constexpr size_t kProgramCount = std::size(kPrograms);
+
 const uint32_t kPrismHit[] = {
 #include "prism.rchit.inc"
 };
@@ -109,7 +125,7 @@ struct Device {
   std::vector<Buffer> buffers;  // the shader binding tables, freed in the destructor
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
   VkPipelineLayout pipeLayout = VK_NULL_HANDLE;
-  Pipeline pipelines[2];  // [tfdm]: created at first use, then shared by every scene
+  Pipeline pipelines[kProgramCount];  // one per kPrograms row: created at first use, then shared by every scene
   std::vector<VkShaderModule> modules;
   VkQueryPool timestamps = VK_NULL_HANDLE;  // 2 queries around each dispatch (none: no timestamps)
   uint32_t timestampBits = 0;
@@ -404,10 +420,11 @@ struct Device {
 
   }
 
-  // The pipeline for the canonical traversal (prism.rint) or the tfdm baseline
-  // (tfdm.rint), created at its first use.
-  const Pipeline& pipeline(bool tfdm) {
-    if (pipelines[tfdm ? 1 : 0].pipeline) return pipelines[tfdm ? 1 : 0];
+  // The pipeline of kPrograms[program] (its intersection shader, the other stages
+  // shared), created at its first use.
+  const Pipeline& pipeline(size_t program) {
+    if (pipelines[program].pipeline) return pipelines[program];
+    const IntersectionProgram& prog = kPrograms[program];
     // Built aside and stored whole: a failure half-way leaves no half-made pipeline to reuse.
     Pipeline P;
     struct Stage {
@@ -417,8 +434,7 @@ struct Device {
     };
     const Stage st[5] = {{VK_SHADER_STAGE_RAYGEN_BIT_KHR, kRgen, sizeof kRgen},
                          {VK_SHADER_STAGE_MISS_BIT_KHR, kMiss, sizeof kMiss},
-                         tfdm ? Stage{VK_SHADER_STAGE_INTERSECTION_BIT_KHR, kTfdmRint, sizeof kTfdmRint}
-                              : Stage{VK_SHADER_STAGE_INTERSECTION_BIT_KHR, kRint, sizeof kRint},
+                         {VK_SHADER_STAGE_INTERSECTION_BIT_KHR, prog.code, prog.bytes},
                          {VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, kPrismHit, sizeof kPrismHit},
                          {VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, kTriangleHit, sizeof kTriangleHit}};
     VkPipelineShaderStageCreateInfo stages[5];
@@ -481,7 +497,7 @@ struct Device {
     P.missRegion = {start + rgenSize, stride, missSize};
     P.hitRegion = {start + rgenSize + missSize, stride, hitSize};
     P.callRegion = {0, 0, 0};
-    return pipelines[tfdm ? 1 : 0] = P;
+    return pipelines[program] = P;
   }
 };
 
@@ -736,11 +752,21 @@ Runner::Runner(GpuRecords R) : geometryName_(R.geometryName), baseTriangles_(R.b
   size_t tlasBytes = 0;
   S.tlas = S.buildAS(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, tg, uint32_t(instances.size()), tlasBytes);
 
-  bool tfdm = false;
-  for (const MeshGpu& m : R.meshes) tfdm = tfdm || m.method == OBLONG_METHOD_TFDM;
-  S.pipe = &D.pipeline(tfdm);
+  // The displaced meshes' traversal (one per scene: the configuration is the scene's).
+  int method = OBLONG_METHOD_CANONICAL;
+  bool any = false;
+  for (const MeshGpu& m : R.meshes) {
+    if (!m.displaced) continue;
+    if (any && m.method != method) fail("--device vulkan", "the scene's meshes ask for two traversals ({} and {})", method, m.method);
+    method = m.method, any = true;
+  }
+  size_t program = kProgramCount;
+  for (size_t i = 0; i < kProgramCount; ++i)
+    if (kPrograms[i].method == method) program = i;
+  if (program == kProgramCount) fail("--device vulkan", "no intersection shader for traversal {} (a newer bake file?)", method);
+  S.pipe = &D.pipeline(program);
   memory_ = {{"vulkan/triangles", R.triBytes},
-             {tfdm ? "vulkan/tfdm_mipmap" : "vulkan/rmip_layers", R.rmipBytes},
+             {kPrograms[program].pyramid, R.rmipBytes},
              {"vulkan/height_maps", R.texelBytes},
              {"vulkan/aabbs", R.aabbs.size() * sizeof(VkAabbPositionsKHR)},
              {"vulkan/plain_meshes", R.plainIndex.size() * 4 + R.plainUV.size() * 8 + R.plainPos.size() * 4},
