@@ -69,6 +69,11 @@ class MicroCells {
   // bit: they come from the same computation).
   int cell(int i, int j, MicroTriangle* out, GridVertexCache& cache) const;
 
+  // T as the kernels (core/kernels/microcells.h) read it; the Vulkan path's records hold
+  // these.
+  const shared::McEdges& kernelEdges() const { return E_; }
+  const shared::McTri& kernelTri() const { return Tm_; }
+
   // True when the cell's four corners lie strictly inside T (two unclipped triangles).
   bool interior(int i, int j) const;
   // For such a cell, its corners q = (v00, v10, v11, v01) (cell() emits the triangles

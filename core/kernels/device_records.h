@@ -9,6 +9,7 @@
 #define OBLONG_VULKAN_SHARED_H
 
 #include "core/kernels/curve_point.h"  // ClaimBounds
+#include "core/kernels/microcells.h"   // McEdges, McTri
 #include "core/kernels/patch_math.h"   // PatchFrame
 
 #ifdef __cplusplus
@@ -17,6 +18,8 @@
 #include <cstdint>
 namespace oblong::vkgpu {
 using shared::ClaimBounds;
+using shared::McEdges;
+using shared::McTri;
 using shared::PatchFrame;
 using glm::dvec2;
 using glm::dvec3;
@@ -93,7 +96,7 @@ struct TriGpu {
   dvec3 obbAxis[5];          // TraversalMesh::obbs (PrismOBB: kAxes slabs; missesPrism)
   double obbLo[5], obbHi[5];
   dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates
-  dvec2 S[3];               // vertices in (absolute) sample coordinates (mcEdges' S)
+  McEdges edges;            // MicroCells' edges (T's vertices in absolute sample coordinates: edges.S)
   dvec2 eps;                // PrismParams: the cell dilation ε
   double vertexErr, a, b, budget, budgetPad, maxP, minNormalLength;  // budgetPad: TraversalMesh::budgetPad
   double inflateB, inflateS;
@@ -103,9 +106,7 @@ struct TriGpu {
   dvec3 tPc, tPX, tPY, tNc, tNX, tNY;
   dvec3 texBoxLo, texBoxHi;
   double texMag, pad2;
-  vec3 p[3], n[3];          // DisplacedTriangle (float, as MicroCells reads it)
-  vec2 t[3];
-  vec4 uvToBary;            // glm::mat2 columns: m[0][0], m[0][1], m[1][0], m[1][1]
+  McTri mc;                 // MicroCells' triangle (DisplacedTriangle in float, scale and bias)
   float uvArea2, pad0;
   ivec2 origin;             // LocalFrame::origin
   ivec2 cellLo, cellHi;     // T's cells, local (cellsOverlapping − origin)

@@ -45,6 +45,7 @@ using glm::ivec2;
 using glm::vec2;
 using glm::vec3;
 using glm::ivec3;
+using glm::vec4;
 using glm::ivec4;
 using glm::bvec2;
 using uint = unsigned int;

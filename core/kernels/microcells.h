@@ -81,6 +81,9 @@ struct McVertex {
 using McBuf = McPV*;
 #define OBLONG_MC_AT(buf, k) (buf)[k]
 #else
+#ifndef McHeights
+#define McHeights int  // the shaders' heights are globals (render/vulkan/shaders/microcells.glsl)
+#endif
 McPV g_mcBuf[2 * OBLONG_MC_POLY];
 #define McBuf int
 #define OBLONG_MC_AT(buf, k) g_mcBuf[k]

@@ -23,7 +23,7 @@ namespace oblong::vk {
 using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
-static_assert(sizeof(TriGpu) == 1424 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
+static_assert(sizeof(TriGpu) == 1600 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
 static_assert(sizeof(MeshGpu) == 176 && sizeof(PushGpu) == 16);
 
 namespace {
@@ -54,7 +54,9 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   g.budgetPad = tm.budgetPad[i];
   g.sbLo = d.toSample(T.uvBox.lo) - dvec2(F.origin);
   g.sbHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
-  for (int k = 0; k < 3; ++k) g.S[k] = d.toSample(T.t[k]);
+  const MicroCells cells(T, d);
+  g.edges = cells.kernelEdges();
+  g.mc = cells.kernelTri();
   g.eps = P.eps;
   g.vertexErr = P.vertexErr, g.a = P.a, g.b = P.b, g.budget = tm.originBudget[i];
   g.maxP = maxAbsVertex(T), g.minNormalLength = T.minNormalLength;
@@ -64,9 +66,6 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   g.tPc = X.Pc, g.tPX = X.PX, g.tPY = X.PY, g.tNc = X.Nc, g.tNX = X.NX, g.tNY = X.NY;
   g.texBoxLo = tm.texPrismBoxes[i].lo, g.texBoxHi = tm.texPrismBoxes[i].hi;
   g.texMag = tm.texPrismMag[i];
-  for (int k = 0; k < 3; ++k) g.p[k] = T.p[k], g.n[k] = T.n[k], g.t[k] = T.t[k];
-  const glm::mat2& M = T.uvToBary;
-  g.uvToBary = vec4(M[0][0], M[0][1], M[1][0], M[1][1]);
   g.uvArea2 = T.uvArea2;
   g.origin = F.origin;
   const CellRange& cr = tm.cells[i];

@@ -19,9 +19,6 @@ float levelAt(int next, int i, int j) {
   int shift = next == 0 ? g_mesh.chunkShift : g_next.chunkShift;
   return texelAt(offset + uint(wrapIndex(j, H)) * uint(W) + uint(wrapIndex(i, W)), shift);
 }
-// std::min and std::max as the CPU evaluates them (which argument wins a tie).
-float minCpp(float a, float b) { return b < a ? b : a; }
-float maxCpp(float a, float b) { return a < b ? b : a; }
 // Displacement::raw and lodHeight: the kernel (core/kernels/heights.h) on the ray's level
 // g_mesh and the next one g_next; the ray's blend fraction g_blend is 0 unless it has a λ
 // per ray.
@@ -48,27 +45,11 @@ dvec2 toSample(dvec2 uv) { return dispToSample(uv, g_mesh.tiling, g_mesh.W, g_me
 float microAtSample(dvec2 s) { return dispMicroAt(0, s, g_mesh.scale, g_mesh.bias); }
 
 // ---- MicroCells: the CPU's own code (core/kernels/microcells.h) ----------------------
-#define McHeights int  // the heights are the globals above (mapAt)
-#include "core/kernels/microcells.h"
-
-// MicroCells' constructor, for the triangle g_tri of the mesh g_mesh (prism.rint's main).
-McEdges g_mcEdges;
-McTri g_mcTri;
-void initMicroCells() {
-  g_mcEdges = mcEdges(TRI.S, TRI.t);
-  for (int k = 0; k < 3; ++k) {
-    g_mcTri.p[k] = TRI.p[k];
-    g_mcTri.n[k] = TRI.n[k];
-    g_mcTri.t[k] = TRI.t[k];
-  }
-  g_mcTri.uvToBary = TRI.uvToBary;
-  g_mcTri.scale = g_mesh.scale;
-  g_mcTri.bias = g_mesh.bias;
-}
+#include "core/kernels/microcells.h"  // McHeights: int (the heights are the globals above)
 
 float mcRaw(McHeights h, int i, int j) { return mapAt(i, j); }
 float mcMicroAt(McHeights h, dvec2 s) { return microAtSample(s); }
-McVertex mcGridVertex(McHeights h, int i, int j) { return mcGridInterior(g_mcTri, sampleToUV(i, j), mapAt(i, j)); }
+McVertex mcGridVertex(McHeights h, int i, int j) { return mcGridInterior(TRI.mc, sampleToUV(i, j), mapAt(i, j)); }
 
 void testMicro(McVertex v0, McVertex v1, McVertex v2);  // traversal.glsl
 
@@ -78,8 +59,8 @@ void testMicro(McVertex v0, McVertex v1, McVertex v2);  // traversal.glsl
 // One loop and one call site for the vertices and the test keep the inlined shader small.
 int microCell(int i, int j) {
   if (TRI.uvArea2 == 0.0) return 0;
-  bool interior = mcInterior(g_mcEdges, i, j);
-  int mask = interior ? 0 : mcClipMask(g_mcEdges, i, j);
+  bool interior = mcInterior(TRI.edges, i, j);
+  int mask = interior ? 0 : mcClipMask(TRI.edges, i, j);
   int count = 0;
   for (int hf = 0; hf < (interior ? 1 : 2); ++hf) {
     int base = 0, m = 4;
@@ -89,11 +70,11 @@ int microCell(int i, int j) {
       g_mcBuf[2] = mcGridPV(i + 1, j + 1, 0, 0);
       g_mcBuf[3] = mcGridPV(i, j + 1, 0, 0);
     } else {
-      m = mcHalf(g_mcEdges, i, j, hf, mask, 0, base);
+      m = mcHalf(TRI.edges, i, j, hf, mask, 0, base);
     }
     if (m < 3) continue;
     McVertex w[OBLONG_MC_POLY];
-    for (int k = 0; k < m; ++k) w[k] = mcWorld(g_mcTri, g_mcEdges, 0, g_mcBuf[base + k], mask);
+    for (int k = 0; k < m; ++k) w[k] = mcWorld(TRI.mc, TRI.edges, 0, g_mcBuf[base + k], mask);
     for (int k = 1; k + 1 < m; ++k) {
       testMicro(w[0], w[k], w[k + 1]);
       ++count;

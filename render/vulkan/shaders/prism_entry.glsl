@@ -12,7 +12,6 @@ bool beginPrism() {
   if (g_mesh.lodLevels > 0) selectLevel(rays[ray].lod);
   g_tri = int(g_mesh.triOffset) + gl_PrimitiveID;
   if (TRI.valid == 0) return false;
-  initMicroCells();
   // The mesh's frame: the world origin minus the frame's in double, rounded once (the
   // instance transform is the identity), as EmbreeScene's callbacks compute it. The
   // rounded float passes through an xor with g_mesh.zero (0) because initPatch widens it

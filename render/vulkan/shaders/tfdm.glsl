@@ -37,7 +37,7 @@ bool runTfdm() {
   g_texPad = texFramePad(g_boxPad, mag);
   g_tAbs = double(OBLONG_TRAV_T_ABS_PADS) * g_texPad / lengthD(g_D);
   TfdmWork w;
-  tfdmTraverse(TRI.cellLo + TRI.origin, TRI.cellHi + TRI.origin, TRI.origin, TRI.S[0], TRI.S[1], TRI.S[2], TRI.sbLo,
+  tfdmTraverse(TRI.cellLo + TRI.origin, TRI.cellHi + TRI.origin, TRI.origin, TRI.edges.S[0], TRI.edges.S[1], TRI.edges.S[2], TRI.sbLo,
                TRI.sbHi, dirLocal(), g_Ot, g_invDt, double(g_tmin) - slack(double(g_tmin)), w);
   g_boxes = w.boxes;
   g_rangeQueries = w.boxes;

@@ -78,7 +78,7 @@ float rpRaw(int I, int J) { return mapAt(I, J); }
 int rpCellMicro(int I, int J) { return microCell(I, J); }
 // The inverter, in float as the CPU traversal calls Newton::invert.
 void rpInvert(vec3 X, out vec2 bary, out float h) {
-  InvFrameF F = invFrame(TRI.p[0], TRI.p[1], TRI.p[2], TRI.n[0], TRI.n[1], TRI.n[2]);
+  InvFrameF F = invFrame(TRI.mc.p[0], TRI.mc.p[1], TRI.mc.p[2], TRI.mc.n[0], TRI.mc.n[1], TRI.mc.n[2]);
   bool fellBack;
   InvResultF r = newtonSolve(F, X, OBLONG_NEWTON_TOLERANCE, OBLONG_NEWTON_MAX_ITERATIONS, true,
                              OBLONG_NEWTON_FALLBACK_POLISH, fellBack);
