@@ -129,7 +129,8 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
     s.g_stackDepth = opt.stackDepth;
     s.g_inversionInTraversal = opt.inversionInTraversal;
     const double maxO = rc.maxO, maxP = maxAbsVertex(tri_);
-    s.rpInit(maxP, maxO, P.a, P.b, P.vertexErr, P.eps, P.kxy, rc.lenD);
+    const RayMargins margins = RayMargins::make(P, maxP, maxO);
+    s.rpInit(margins, maxP, maxO, P.a, P.b, P.eps, P.kxy, rc.lenD);
     // Within the origin budget the precomputed prism and boxes (padded for the budget)
     // serve; beyond it, rebuilt with this ray's margins.
     const double budget = mesh.originBudget[prim];
@@ -143,7 +144,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
       s.g_boxLo = mesh.prismBoxes[prim].lo;
       s.g_boxHi = mesh.prismBoxes[prim].hi;
     } else {
-      ownPrism_ = RayMargins::make(P, maxP, maxO).prism(F, P);
+      ownPrism_ = margins.prism(F);
       prism_ = &ownPrism_;
       BoxD box = Prism::exact(tri_, P.a, P.b).bounds();
       box.pad(s.g_boxPad);

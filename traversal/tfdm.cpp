@@ -296,9 +296,8 @@ class Tfdm final : public TfdmIntersector {
     const RayMargins m = RayMargins::make(P, maxAbsVertex(T), maxO);
     // The ray in the boxes' frame; its rotation's rounding (and the frame's) is padded.
     const dvec3 Ob = X.rot(O), Db = X.rot(D), invDb = 1.0 / Db;
-    const double boxPad =
-        worldBoxes_ ? m.boxPad : TextureFrame::pad(m.boxPad, maxO + maxAbsVertex(T) + std::abs(P.a) + std::abs(P.b));
-    const double tSlackAbs = OBLONG_TRAV_T_ABS_PADS * boxPad / glm::length(D);
+    const double boxPad = worldBoxes_ ? m.boxPad : shared::texPiecePad(m.boxPad, maxO, maxAbsVertex(T), P.a, P.b);
+    const double tSlackAbs = shared::tSlackAbs(boxPad, shared::lengthD(D));
     const dvec2 uvLo = d.toSample(T.uvBox.lo) - dvec2(F.origin), uvHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
     const double mMin = double(T.minNormalLength);
     // T's uv triangle in sample coordinates, with the inside sign of each edge.

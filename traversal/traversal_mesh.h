@@ -69,19 +69,12 @@ inline const RayConstants& rayConstants(const Ray& r) {
 // Margins for the watertight micro-triangle test's own rounding (a few ulps of |p − o|)
 // for rays whose origin has max-norm at most maxO: the boxes and the inflated prism must
 // hold the triangle as that test sees it.
-struct RayMargins {
-  double rayErr, boxPad, extraB, extraS;
+// The formulas are the kernel's (core/kernels/ray_patch.h, rayMargin), shared with the shaders.
+struct RayMargins : shared::RayMargin {
   static RayMargins make(const PrismParams& P, double maxP, double maxO) {
-    RayMargins m;
-    m.rayErr = shared::rayError(maxP, maxO, P.a, P.b);
-    m.boxPad = P.vertexErr + m.rayErr;
-    m.extraB = shared::rayExtraB(P.kb, m.rayErr);
-    m.extraS = shared::rayExtraS(P.ks, m.rayErr);
-    return m;
+    return {shared::rayMargin(maxP, maxO, P.a, P.b, P.vertexErr, P.inflateS, P.inflateB, P.kb, P.ks)};
   }
-  Prism prism(const LocalFrame& F, const PrismParams& P) const {
-    return Prism::inflated(F, P.a - P.inflateS - extraS, P.b + P.inflateS + extraS, P.inflateB + extraB);
-  }
+  Prism prism(const LocalFrame& F) const { return Prism::inflated(F, lo, hi, delta); }
 };
 
 // Slabs in T's frame around the six vertices of a prism, hence around the prism (a
@@ -219,7 +212,7 @@ struct TraversalMesh {
   // box by `worldPad` (RayMargins::boxPad) for rays whose origin has max-norm up to maxO.
   BoxD texPrismBox(size_t prim, double worldPad, double maxO) const {
     BoxD b = texPrismBoxes[prim];
-    b.pad(TextureFrame::pad(worldPad, std::max(maxO, texPrismMag[prim])));
+    b.pad(shared::texBoxPad(worldPad, maxO, texPrismMag[prim]));
     return b;
   }
   // The world box of triangle `prim`'s exact prism (empty when it is skipped).
@@ -293,7 +286,7 @@ void TraversalMesh::buildTriangle(size_t i, Heights&& heights) {
   originBudget[i] = 16 * (maxP + ab) + 16;
   const RayMargins m = RayMargins::make(params[i], maxP, originBudget[i]);
   budgetPad[i] = m.boxPad;
-  prisms[i] = m.prism(frames[i], params[i]);
+  prisms[i] = m.prism(frames[i]);
   prismBoxes[i] = Prism::exact(T, params[i].a, params[i].b).bounds();
   prismBoxes[i].pad(m.boxPad);
   inflatedBoxes[i] = prisms[i].bounds();

@@ -168,6 +168,13 @@ OBLONG_INLINE void clipPrismSlabs(OBLONG_IN_ARRAY dvec3 axis[5], OBLONG_IN_ARRAY
   }
 }
 
+// The absolute part of the traversal's t slack for boxes padded by `pad` (a ray of
+// direction length lenD moves by pad over pad / lenD): rpInit's, missesPrism's, tfdm's.
+OBLONG_INLINE double tSlackAbs(double pad, double lenD) {
+  OBLONG_PRECISE double r = double(OBLONG_TRAV_T_ABS_PADS) * pad / lenD;
+  return r;
+}
+
 // TraversalMesh::missesPrism, the cheap exact reject before any per-ray set-up: true when
 // [tmin, tmax] (with the traversal's slack for a box pad `budgetPad`) misses the padded
 // box around the inflated prism [infLo, infHi] or its oriented slabs. Only for origins
@@ -177,7 +184,7 @@ OBLONG_INLINE bool missesPrism(double tmin, double tmax, double maxO, double bud
                                OBLONG_IN(dvec3) infHi, bool obbValid, OBLONG_IN_ARRAY dvec3 axis[5],
                                OBLONG_IN_ARRAY double lo[5], OBLONG_IN_ARRAY double hi[5]) {
   if (!(maxO <= budget)) return false;
-  OBLONG_PRECISE double tAbs = double(OBLONG_TRAV_T_ABS_PADS) * budgetPad / lenD;
+  double tAbs = tSlackAbs(budgetPad, lenD);
   OBLONG_PRECISE double t0 = tmin - (OBLONG_TRAV_SLACK_REL * abs(tmin) + tAbs);
   OBLONG_PRECISE double t1 = tmax + (OBLONG_TRAV_SLACK_REL * abs(tmax) + tAbs);
   clipBox(infLo, infHi, O, invD, t0, t1);

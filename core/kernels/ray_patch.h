@@ -88,12 +88,46 @@ OBLONG_INLINE double rayExtraS(double ks, double rayErr) {
   return r;
 }
 
+// The margins of a ray whose origin has max-norm maxO (traversal/traversal_mesh.h's
+// RayMargins) for a triangle of vertex magnitude maxP, heights [a, b], vertex rounding
+// vertexErr, inflation (inflateS, inflateB) and claim slopes (kb, ks): the watertight
+// test's rounding, the boxes' pad and the inflated prism's heights [lo, hi] and bulge
+// delta (Prism::inflated's arguments).
+struct RayMargin {
+  double rayErr, boxPad, lo, hi, delta;
+};
+OBLONG_INLINE RayMargin rayMargin(double maxP, double maxO, double a, double b, double vertexErr, double inflateS,
+                                  double inflateB, OBLONG_IN(dvec2) kb, double ks) {
+  RayMargin m;
+  m.rayErr = rayError(maxP, maxO, a, b);
+  OBLONG_PRECISE double pad = vertexErr + m.rayErr;
+  m.boxPad = pad;
+  double extraB = rayExtraB(kb, m.rayErr), extraS = rayExtraS(ks, m.rayErr);
+  OBLONG_PRECISE double lo = a - inflateS - extraS, hi = b + inflateS + extraS, delta = inflateB + extraB;
+  m.lo = lo;
+  m.hi = hi;
+  m.delta = delta;
+  return m;
+}
+
 // A world pad in the texture frame: the rotation maps a box padded by p per world
 // coordinate into one padded by √3 p (1.75 > √3) per texture axis, plus the rotation's
 // own rounding of points of max-norm up to mag.
 OBLONG_INLINE double texFramePad(double worldPad, double mag) {
   OBLONG_PRECISE double r = 1.75 * worldPad + OBLONG_TRAV_OBB_ROUND * (mag + 1.0);
   return r;
+}
+// The pad of the exact prism's box in its texture frame (TraversalMesh::texPrismBox) for
+// a world pad meant for origins up to max-norm maxO, the prism's own vertices having
+// max-norm texMag in that frame.
+OBLONG_INLINE double texBoxPad(double worldPad, double maxO, double texMag) {
+  return texFramePad(worldPad, max(maxO, texMag));
+}
+// The boxes' pad for boxes built in the texture frame on the fly (the pieces' boxes, tfdm's
+// nodes): the world pad rotated with points of max-norm up to maxO + maxP + |a| + |b|.
+OBLONG_INLINE double texPiecePad(double boxPad, double maxO, double maxP, double a, double b) {
+  OBLONG_PRECISE double mag = maxO + maxP + (abs(a) + abs(b));
+  return texFramePad(boxPad, mag);
 }
 
 // The rectangle of a piece: its padded endpoints' box.

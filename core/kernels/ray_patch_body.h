@@ -40,18 +40,15 @@ bool g_boxOnly;
 RpEntry g_st[OBLONG_RP_STACK];
 int g_sp;
 
-// The per-ray margins, from the triangle's magnitudes (maxP: its largest vertex
-// coordinate; [a, b]: its heights; vertexErr: its vertices' rounding), the ray's origin
-// magnitude maxO and direction length lenD; resets the work counters.
-void rpInit(double maxP, double maxO, double a, double b, double vertexErr, OBLONG_IN(dvec2) eps,
+// The per-ray margins, from the ray's own (m: rayMargin at the ray's origin magnitude
+// maxO) and the triangle's magnitudes (maxP: its largest vertex coordinate; [a, b]: its
+// heights), and the ray's direction length lenD; resets the work counters.
+void rpInit(OBLONG_IN(RayMargin) m, double maxP, double maxO, double a, double b, OBLONG_IN(dvec2) eps,
             OBLONG_IN(dvec2) kxy, double lenD) {
-  double rayErr = rayError(maxP, maxO, a, b);
-  OBLONG_PRECISE double boxPad = vertexErr + rayErr;
-  g_boxPad = boxPad;
-  OBLONG_PRECISE double tAbs = double(OBLONG_TRAV_T_ABS_PADS) * g_boxPad / lenD;
-  g_tAbs = tAbs;
-  g_texPad = texFramePad(g_boxPad, maxO + maxP + (abs(a) + abs(b)));
-  OBLONG_PRECISE dvec2 e = eps + kxy * (double(OBLONG_TRAV_RAY_ERR_FACTOR) * rayErr);
+  g_boxPad = m.boxPad;
+  g_tAbs = tSlackAbs(g_boxPad, lenD);
+  g_texPad = texPiecePad(g_boxPad, maxO, maxP, a, b);
+  OBLONG_PRECISE dvec2 e = eps + kxy * (double(OBLONG_TRAV_RAY_ERR_FACTOR) * m.rayErr);
   g_eps = e;
   double maxDil = max(g_eps.x, g_eps.y);
   g_wideEps = maxDil > OBLONG_TRAV_WIDE_EPS_REL * double(g_marchingScale);

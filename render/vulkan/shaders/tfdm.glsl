@@ -29,13 +29,11 @@ double tfdmLimit() { return bestLimit(); }
 int tfdmLeaf(int x, int y) { return microCell(x, y); }
 #include "core/kernels/tfdm_body.h"
 
-// Tfdm::intersect after the prism's set-up (initPatch): the boxes' pad in the texture
-// frame, TextureFrame::pad(boxPad, maxO + maxAbsVertex(T) + |a| + |b|), and its t slack.
-// Returns whether a micro-triangle was hit (the closest, in g_hitT and g_hv*).
+// Tfdm::intersect after the prism's set-up (initPatch, whose g_texPad is tfdm's boxes'
+// pad): the t slack of that pad. Returns whether a micro-triangle was hit (the closest,
+// in g_hitT and g_hv*).
 bool runTfdm() {
-  precise double mag = maxNormO() + TRI.maxP + abs(TRI.a) + abs(TRI.b);
-  g_texPad = texFramePad(g_boxPad, mag);
-  g_tAbs = double(OBLONG_TRAV_T_ABS_PADS) * g_texPad / lengthD(g_D);
+  g_tAbs = tSlackAbs(g_texPad, lengthD(g_D));
   TfdmWork w;
   tfdmTraverse(TRI.cellLo + TRI.origin, TRI.cellHi + TRI.origin, TRI.origin, TRI.edges.S[0], TRI.edges.S[1], TRI.edges.S[2], TRI.sbLo,
                TRI.sbHi, dirLocal(), g_Ot, g_invDt, double(g_tmin) - slack(double(g_tmin)), w);

@@ -114,16 +114,16 @@ void rpBoxOverRect(dvec2 lo, dvec2 hi, vec2 h, out dvec3 blo, out dvec3 bhi) {
 // The inflated prism (RayMargins::prism): with the budget's margins within it (what
 // TraversalMesh precomputes on the CPU), else with the ray's own.
 PrismShape g_P;
+RayMargin marginAt(double maxO) {
+  return rayMargin(TRI.maxP, maxO, TRI.a, TRI.b, TRI.vertexErr, TRI.inflateS, TRI.inflateB, TRI.claim.kb, TRI.claim.ks);
+}
 void rpInflatedBox(out dvec3 lo, out dvec3 hi) {
   double maxO = maxNormO();
-  bool pre = maxO <= TRI.budget;
-  double rayErr = rayError(TRI.maxP, pre ? TRI.budget : maxO, TRI.a, TRI.b);
-  double extraB = rayExtraB(TRI.claim.kb, rayErr), extraS = rayExtraS(TRI.claim.ks, rayErr);
-  g_P = prismInflated(g_F, TRI.a - TRI.inflateS - extraS, TRI.b + TRI.inflateS + extraS, TRI.inflateB + extraB);
+  RayMargin m = marginAt(maxO <= TRI.budget ? TRI.budget : maxO);
+  g_P = prismInflated(g_F, m.lo, m.hi, m.delta);
   prismBox(g_P, lo, hi);  // Prism::bounds(), padded
-  precise double ppad = pre ? TRI.vertexErr + rayErr : g_boxPad;
-  lo -= dvec3(ppad);
-  hi += dvec3(ppad);
+  lo -= dvec3(m.boxPad);
+  hi += dvec3(m.boxPad);
 }
 int rpPrismCrossings(out Crossing first, out Crossing last) { return prismCrossings(g_P, g_O, g_D, first, last); }
 
@@ -184,7 +184,7 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
   g_stackDepth = g_mesh.stackDepth;
   g_inversionInTraversal = g_mesh.inversionInTraversal != 0;
   double maxO = maxNormO();
-  rpInit(TRI.maxP, maxO, TRI.a, TRI.b, TRI.vertexErr, TRI.eps, TRI.claim.kxy, lengthD(g_D));
+  rpInit(marginAt(maxO), TRI.maxP, maxO, TRI.a, TRI.b, TRI.eps, TRI.claim.kxy, lengthD(g_D));
   bool pre = maxO <= TRI.budget;
   if (pre) {  // TraversalMesh::prismBoxes, padded for the budget
     g_boxLo = TRI.boxPadLo;
@@ -196,8 +196,7 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
   // The ray and the exact prism's box in the texture frame (TraversalMesh::texPrismBox).
   g_Ot = dvec3(dotD(TRI.texAxis[0], g_O), dotD(TRI.texAxis[1], g_O), dotD(TRI.texAxis[2], g_O));
   g_invDt = 1.0 / dvec3(dotD(TRI.texAxis[0], g_D), dotD(TRI.texAxis[1], g_D), dotD(TRI.texAxis[2], g_D));
-  double tMag = pre ? TRI.budget : maxO;
-  double tPad = texFramePad(pre ? TRI.budgetPad : g_boxPad, tMag < TRI.texMag ? TRI.texMag : tMag);
+  double tPad = texBoxPad(pre ? TRI.budgetPad : g_boxPad, pre ? TRI.budget : maxO, TRI.texMag);
   g_texLo = TRI.texBoxLo - dvec3(tPad);
   g_texHi = TRI.texBoxHi + dvec3(tPad);
   g_wr = makeWatertightRay(o, d);
