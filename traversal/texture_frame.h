@@ -34,11 +34,6 @@ struct TextureFrame {
     t.Nc = t.rot(F.Nc), t.NX = t.rot(F.NX), t.NY = t.rot(F.NY);
     return t;
   }
-  // The pad of a box in this frame, for a pad `worldPad` of the world's axes (an error
-  // bounded per world coordinate is bounded by √3 times that along any unit axis) and
-  // the rounding of the rotation of points of max-norm up to `mag` (the kernel, shared
-  // with the shaders).
-  static double pad(double worldPad, double mag) { return shared::texFramePad(worldPad, mag); }
 };
 
 }  // namespace oblong
