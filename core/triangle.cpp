@@ -2,6 +2,9 @@
 
 #include <glm/gtc/matrix_inverse.hpp>
 
+#include <cmath>
+#include <limits>
+
 namespace oblong {
 
 vec3 roundToFloat(const dvec3& v) { return vec3(float(v.x), float(v.y), float(v.z)); }
@@ -34,6 +37,13 @@ float minInterpolatedNormalLength(const vec3& n0f, const vec3& n1f, const vec3& 
     }
   }
   return float(std::sqrt(best));
+}
+
+float invNormalLengthBound(float mf) {
+  const double q = (1.0 / double(mf)) * (1.0 + 0x1p-20);
+  float f = float(q);
+  if (double(f) < q) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
 }
 
 bool DisplacedTriangle::prepare() {

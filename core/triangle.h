@@ -34,4 +34,9 @@ struct DisplacedTriangle {
 // quadratic, minimised exactly over the interior, the three edges and the vertices.
 float minInterpolatedNormalLength(const vec3& n0, const vec3& n1, const vec3& n2);
 
+// A float >= 1/m for every m that rounds to the float mf (minInterpolatedNormalLength's
+// result is rounded to nearest): 1/mf with a relative margin of 2^-20, rounded up. The
+// boxes multiply by it (shared::boxOverRect) instead of dividing by |N|.
+float invNormalLengthBound(float mf);
+
 }  // namespace oblong

@@ -205,7 +205,7 @@ TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "
         const dvec2 sb0 = s.disp.toSample(T.uvBox.lo) - dvec2(F.origin), sb1 = s.disp.toSample(T.uvBox.hi) - dvec2(F.origin);
         const dvec2 lo = glm::max(dvec2(x0, y0) - dvec2(F.origin), sb0);
         const dvec2 hi = glm::min(dvec2(x1 + 1, y1 + 1) - dvec2(F.origin), sb1);
-        const BoxD box = boxOverRect(F, T.minNormalLength, lo, hi, h.lo, h.hi, P.vertexErr);
+        const BoxD box = boxOverRect(F, invNormalLengthBound(T.minNormalLength), lo, hi, h.lo, h.hi, P.vertexErr);
         forEachMicroTriangle(T, s.disp, CellRange{x0, y0, x1, y1}, [&](const MicroTriangle& m) {
           for (const auto& v : m.v) {
             const dvec3 p(v.p);
@@ -219,3 +219,20 @@ TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "
   }
 }
 
+
+TEST_CASE("a triangle's 1/|N| bound holds for every m its float rounds from", "[traversal][prism][unit]") {
+  // minInterpolatedNormalLength rounds to nearest: the true minimum lies within half an
+  // ulp of the float, and boxOverRect multiplies by invNormalLengthBound(m) instead of dividing.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> M(1e-6f, 1.0f);
+  for (int q = 0; q < 100000; ++q) {
+    const float mf = q == 0 ? 1.0f : M(rng);
+    const long double halfUlp = (static_cast<long double>(std::nextafter(mf, 2.0f)) - mf) / 2;
+    const long double mTrueMin = static_cast<long double>(mf) - halfUlp;
+    const float inv = invNormalLengthBound(mf);
+    INFO("m " << mf);
+    REQUIRE(static_cast<long double>(inv) * mTrueMin >= 1.0L);
+    // and it stays tight: within 2^-19 of 1/m
+    REQUIRE(static_cast<double>(inv) * static_cast<double>(mf) <= 1.0 + 0x1p-19);
+  }
+}

@@ -104,7 +104,8 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
         ray_(ray),
         tex_(mesh.texFrames[prim]),
         blend_(mesh.disp.blendOf(ray.lod)),
-        watertightRay_(rc.wt) {
+        watertightRay_(rc.wt),
+        invM_(invNormalLengthBound(tri_.minNormalLength)) {
     const PrismParams& P = mesh.params[prim];
     const LocalFrame& F = mesh.frames[prim];
     Loop& s = *this;
@@ -228,7 +229,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
   }
   dvec2 rpToSample(const dvec2& uv) const { return disp_.toSample(uv); }
   void rpBoxOverRect(const dvec2& lo, const dvec2& hi, const vec2& h, dvec3& blo, dvec3& bhi) const {
-    shared::boxOverRect(tex_.Pc, tex_.PX, tex_.PY, tex_.Nc, tex_.NX, tex_.NY, double(tri_.minNormalLength), lo, hi,
+    shared::boxOverRect(tex_.Pc, tex_.PX, tex_.PY, tex_.Nc, tex_.NX, tex_.NY, invM_, lo, hi,
                         double(h.x), double(h.y), this->g_texPad, blo, bhi);
   }
   void rpInflatedBox(dvec3& lo, dvec3& hi) const {
@@ -264,6 +265,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
   const TextureFrame& tex_;  // the boxes' frame
   const float blend_;        // the ray's level-of-detail blend (Displacement::blendOf)
   const WatertightRay watertightRay_;
+  const double invM_;  // >= 1/min |N| over T: the boxes' scale of h (shared::boxOverRect)
   const Prism* prism_ = nullptr;  // inflated prism: precomputed, or ownPrism_ for far origins
   Prism ownPrism_;
   BoxD inflatedBox_;

@@ -11,10 +11,10 @@ namespace oblong {
 // Frame: a LocalFrame, or anything with its P and N members (Pc, PX, PY, Nc, NX, NY)
 // expressed in another orthonormal basis (tfdm's texture frame).
 template <typename Frame>
-inline BoxD boxOverRect(const Frame& F, double m, const dvec2& lo, const dvec2& hi, double hlo, double hhi,
+inline BoxD boxOverRect(const Frame& F, double invM, const dvec2& lo, const dvec2& hi, double hlo, double hhi,
                         double pad) {
   BoxD box;
-  shared::boxOverRect(F.Pc, F.PX, F.PY, F.Nc, F.NX, F.NY, m, lo, hi, hlo, hhi, pad, box.lo, box.hi);
+  shared::boxOverRect(F.Pc, F.PX, F.PY, F.Nc, F.NX, F.NY, invM, lo, hi, hlo, hhi, pad, box.lo, box.hi);
   return box;
 }
 

@@ -200,8 +200,8 @@ struct Roots {
 // closest hit and the micro-cells (built at the first leaf).
 struct TfdmRay : shared::TfdmLoop<TfdmRay> {
   TfdmRay(const CellPyramid& pyr, const Displacement& d, const TextureFrame& X, const DisplacedTriangle& T,
-          const Ray& r, double mMin, double boxPad, double tAbs)
-      : pyr(pyr), d(d), X(X), T(T), r(r), wr(r), mMin(mMin), boxPad(boxPad), tAbs(tAbs) {}
+          const Ray& r, double invM, double boxPad, double tAbs)
+      : pyr(pyr), d(d), X(X), T(T), r(r), wr(r), invM(invM), boxPad(boxPad), tAbs(tAbs) {}
 
   double slack(double t) const { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tAbs; }
   vec2 tfdmHeights(int L, int x, int y) const {
@@ -209,7 +209,7 @@ struct TfdmRay : shared::TfdmLoop<TfdmRay> {
     return vec2(h.lo, h.hi);
   }
   void tfdmBox(const dvec2& lo, const dvec2& hi, const vec2& h, dvec3& blo, dvec3& bhi) const {
-    shared::boxOverRect(X.Pc, X.PX, X.PY, X.Nc, X.NX, X.NY, mMin, lo, hi, h.x, h.y, boxPad, blo, bhi);
+    shared::boxOverRect(X.Pc, X.PX, X.PY, X.Nc, X.NX, X.NY, invM, lo, hi, h.x, h.y, boxPad, blo, bhi);
   }
   double tfdmLimit() const {
     return best.found ? double(best.t) + slack(best.t) : double(r.tmax) + slack(r.tmax);
@@ -228,7 +228,7 @@ struct TfdmRay : shared::TfdmLoop<TfdmRay> {
   const DisplacedTriangle& T;
   const Ray& r;
   const WatertightRay wr;
-  double mMin, boxPad, tAbs;
+  double invM, boxPad, tAbs;
   ClosestHit best;
   std::optional<MicroCells> cells;
 };
@@ -299,13 +299,13 @@ class Tfdm final : public TfdmIntersector {
     const double boxPad = worldBoxes_ ? m.boxPad : shared::texPiecePad(m.boxPad, maxO, maxAbsVertex(T), P.a, P.b);
     const double tSlackAbs = shared::tSlackAbs(boxPad, shared::lengthD(D));
     const dvec2 uvLo = d.toSample(T.uvBox.lo) - dvec2(F.origin), uvHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
-    const double mMin = double(T.minNormalLength);
+    const double invM = invNormalLengthBound(T.minNormalLength);
     // T's uv triangle in sample coordinates, with the inside sign of each edge.
     dvec2 S[3];
     for (int k = 0; k < 3; ++k) S[k] = d.toSample(T.t[k]);
     // Child order: from the signs of the ray's texture-space direction.
     const dvec2 dl = approxDirLocal(F, D);
-    TfdmRay tr(*pyr_, d, X, T, r, mMin, boxPad, tSlackAbs);
+    TfdmRay tr(*pyr_, d, X, T, r, invM, boxPad, tSlackAbs);
     shared::TfdmWork w;
     tr.tfdmTraverse(ivec2(cr.x0, cr.y0), ivec2(cr.x1, cr.y1), F.origin, S[0], S[1], S[2], uvLo, uvHi, dl, Ob, invDb,
                     r.tmin - tr.slack(r.tmin), w);

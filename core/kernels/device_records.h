@@ -98,7 +98,7 @@ struct TriGpu {
   dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates
   McEdges edges;            // MicroCells' edges (T's vertices in absolute sample coordinates: edges.S)
   dvec2 eps;                // PrismParams: the cell dilation ε
-  double vertexErr, a, b, budget, budgetPad, maxP, minNormalLength;  // budgetPad: TraversalMesh::budgetPad
+  double vertexErr, a, b, budget, budgetPad, maxP, invMinNormalLength;  // budgetPad: TraversalMesh::budgetPad
   double inflateB, inflateS;
   // TraversalMesh::texFrames (the boxes' frame: axes, and P and N in it),
   // texPrismBoxes (unpadded) and texPrismMag.

@@ -9,12 +9,16 @@
 // the RangeQuery's heights [hlo, hhi] over those cells. Every micro-vertex is then
 //     P(x) + h·N(x)/|N(x)| = P(x) + (h/|N(x)|)·N(x),   x in the rectangle, h in [hlo, hhi],
 // and is bounded with interval arithmetic: P and N are affine in x (their ranges over
-// the rectangle are exact), |N| over T lies in [max(m, dist(0, box of N)), min(1, max
-// corner)], so k = h/|N| lies in an interval, and k·N is an interval product. The four
-// corners alone are NOT enough (normalised normals bulge). Micro-triangles are convex
-// hulls of their vertices, so the box holds them too. P = Pc + PX X + PY Y and
-// N = Nc + NX X + NY Y are given in any orthonormal basis (the world's, or tfdm's
-// texture frame); m is the smallest |N| over T.
+// the rectangle are exact), and |N| over T lies in [m, 1] (m is T's smallest |N|, and N
+// interpolates unit normals, so |N| <= 1 by convexity), so k = h/|N| lies in
+// [min(h/m, h), max(h/m, h)] and k·N is an interval product. The four corners alone are
+// NOT enough (normalised normals bulge). Micro-triangles are convex hulls of their
+// vertices, so the box holds them too. P = Pc + PX X + PY Y and N = Nc + NX X + NY Y are
+// given in any orthonormal basis (the world's, or tfdm's texture frame); invM >= 1/m is
+// T's, rounded up once per triangle (invNormalLengthBound, core/triangle.h). T's bounds on |N| rather
+// than the rectangle's own: a box costs no square root and no division, and is looser
+// only by about h·(1/m - 1/min over the rectangle of |N|) along N: nothing where T's
+// normals are parallel (m = 1), little on a finely tessellated curved mesh (m near 1).
 //
 // Precision: computed in double and padded explicitly by `pad` (the float error of the
 // micro-vertices plus the ray test's own rounding) and by its own rounding; the box is
@@ -27,7 +31,7 @@
 OBLONG_KERNELS_BEGIN
 
 OBLONG_INLINE void boxOverRect(OBLONG_IN(dvec3) Pc, OBLONG_IN(dvec3) PX, OBLONG_IN(dvec3) PY, OBLONG_IN(dvec3) Nc,
-                               OBLONG_IN(dvec3) NX, OBLONG_IN(dvec3) NY, double m, OBLONG_IN(dvec2) lo,
+                               OBLONG_IN(dvec3) NX, OBLONG_IN(dvec3) NY, double invM, OBLONG_IN(dvec2) lo,
                                OBLONG_IN(dvec2) hi, double hlo, double hhi, double pad, OBLONG_OUT(dvec3) blo,
                                OBLONG_OUT(dvec3) bhi) {
   OBLONG_PRECISE dvec3 Nlo, Nhi;
@@ -39,19 +43,10 @@ OBLONG_INLINE void boxOverRect(OBLONG_IN(dvec3) Pc, OBLONG_IN(dvec3) PX, OBLONG_
     Nlo[k] = Nc[k] + min(nx0, nx1) + min(ny0, ny1);
     Nhi[k] = Nc[k] + max(nx0, nx1) + max(ny0, ny1);
   }
-  // |N| bounds over (rectangle ∩ T).
-  OBLONG_PRECISE double d2 = 0.0, c2 = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    OBLONG_PRECISE double g = max(max(0.0, Nlo[k]), -Nhi[k]);
-    d2 += g * g;
-    OBLONG_PRECISE double c = max(abs(Nlo[k]), abs(Nhi[k]));
-    c2 += c * c;
-  }
-  OBLONG_PRECISE double nMin = max(m, sqrt(d2)) * (1.0 - 1e-12);
-  OBLONG_PRECISE double nMax = min(1.0, sqrt(c2)) * (1.0 + 1e-12);
-  // k = h/|N|, |N| in [nMin, nMax] (positive).
-  OBLONG_PRECISE double klo = hlo < 0.0 ? hlo / nMin : hlo / nMax;
-  OBLONG_PRECISE double khi = hhi > 0.0 ? hhi / nMin : hhi / nMax;
+  // k = h/|N|, |N| in [m, 1] (1 + 1e-12: unit normals' rounding); invM's margin covers
+  // the products' rounding.
+  OBLONG_PRECISE double klo = hlo < 0.0 ? hlo * invM : hlo * (1.0 - 1e-12);
+  OBLONG_PRECISE double khi = hhi > 0.0 ? hhi * invM : hhi * (1.0 - 1e-12);
   for (int k = 0; k < 3; ++k) {
     OBLONG_PRECISE double a = klo * Nlo[k], b = klo * Nhi[k], c = khi * Nlo[k], d = khi * Nhi[k];
     blo[k] += min(min(a, b), min(c, d));

@@ -59,7 +59,7 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   g.mc = cells.kernelTri();
   g.eps = P.eps;
   g.vertexErr = P.vertexErr, g.a = P.a, g.b = P.b, g.budget = tm.originBudget[i];
-  g.maxP = maxAbsVertex(T), g.minNormalLength = T.minNormalLength;
+  g.maxP = maxAbsVertex(T), g.invMinNormalLength = invNormalLengthBound(T.minNormalLength);
   g.inflateB = P.inflateB, g.inflateS = P.inflateS;
   const TextureFrame& X = tm.texFrames[i];
   for (int k = 0; k < 3; ++k) g.texAxis[k] = X.axis[k];

@@ -108,7 +108,7 @@ void rpStat(int what) {}
 double maxNormO() { return max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z)); }
 
 void rpBoxOverRect(dvec2 lo, dvec2 hi, vec2 h, out dvec3 blo, out dvec3 bhi) {
-  boxOverRect(TRI.tPc, TRI.tPX, TRI.tPY, TRI.tNc, TRI.tNX, TRI.tNY, double(TRI.minNormalLength), lo, hi, double(h.x),
+  boxOverRect(TRI.tPc, TRI.tPX, TRI.tPY, TRI.tNc, TRI.tNX, TRI.tNY, TRI.invMinNormalLength, lo, hi, double(h.x),
               double(h.y), g_texPad, blo, bhi);
 }
 // The inflated prism (RayMargins::prism): with the budget's margins within it (what
