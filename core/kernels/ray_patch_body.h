@@ -9,19 +9,25 @@
 // GLSL inlines every call, and the inlined size is what the shader compiler pays for.
 
 // ---- the state ------------------------------------------------------------------------
-// Set by the includer before rpInit: the triangle and the ray.
+// Set by the includer before rpInit: the triangle's constants. An includer that defines
+// OBLONG_RP_TRIANGLE_RECORD names them itself instead, as macros that read its record
+// where they are used: the shader does, so that they are loads inside the loop rather
+// than held live across it (docs/vulkan.md, "Live state").
+#ifndef OBLONG_RP_TRIANGLE_RECORD
 PatchFrame g_F;        // the triangle's frame (core/kernels/patch_math.h)
 dvec3 g_N13;           // its normal at the centroid, frameN(g_F, (1/3, 1/3))
 ClaimBounds g_claim;   // its bounds on the claims' errors
 bool g_wellPosed;      // the shell analysis vouches for the curve machinery
+ivec2 g_cellLo, g_cellHi;  // the triangle's cells, local sample coordinates
+dvec2 g_sbLo, g_sbHi;      // the triangle's uv box, local sample coordinates
+ivec2 g_origin;            // the absolute sample index of local (0, 0)
+#endif
+// Set by the includer before rpInit: the ray.
 float g_tmin, g_tmax;  // the ray's [tmin, tmax] (float, as Ray)
 dvec3 g_O, g_D, g_invD;
 dvec3 g_boxLo, g_boxHi;  // the exact prism's world box, padded (box-only subdivision)
 dvec3 g_Ot, g_invDt;     // the ray in the texture frame
 dvec3 g_texLo, g_texHi;  // the exact prism's box in the texture frame, padded
-ivec2 g_cellLo, g_cellHi;  // the triangle's cells, local sample coordinates
-dvec2 g_sbLo, g_sbHi;      // the triangle's uv box, local sample coordinates
-ivec2 g_origin;            // the absolute sample index of local (0, 0)
 float g_marchingScale;
 int g_stackDepth;              // entries used of the stack
 bool g_inversionInTraversal;   // Fig. 5a

@@ -101,6 +101,17 @@ int rpPrismCrossings(out Crossing first, out Crossing last);
 void rpStat(int what) {}
 
 // ---- the driver --------------------------------------------------------------------------
+// The triangle's constants are read from its record where the driver uses them.
+#define OBLONG_RP_TRIANGLE_RECORD
+#define g_F TRI.F
+#define g_N13 TRI.N13
+#define g_claim TRI.claim
+#define g_wellPosed (TRI.wellPosed != 0)
+#define g_cellLo TRI.cellLo
+#define g_cellHi TRI.cellHi
+#define g_sbLo TRI.sbLo
+#define g_sbHi TRI.sbHi
+#define g_origin TRI.origin
 #define OBLONG_HOOK(f) f
 #define OBLONG_RP_STACK OBLONG_TRAV_STACK_GPU
 #include "core/kernels/ray_patch_body.h"
@@ -171,15 +182,6 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
   g_O = dvec3(o);
   g_D = dvec3(d);
   g_invD = 1.0 / g_D;
-  g_cellLo = TRI.cellLo;
-  g_cellHi = TRI.cellHi;
-  g_sbLo = TRI.sbLo;
-  g_sbHi = TRI.sbHi;
-  g_origin = TRI.origin;
-  g_F = TRI.F;
-  g_N13 = TRI.N13;
-  g_claim = TRI.claim;
-  g_wellPosed = TRI.wellPosed != 0;
   g_marchingScale = g_mesh.marchingScale;
   g_stackDepth = g_mesh.stackDepth;
   g_inversionInTraversal = g_mesh.inversionInTraversal != 0;
