@@ -358,7 +358,7 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
     return it == now.end() ? int64_t(0) : it->second;
   };
   auto fallbacks = [&] { return statValue("newton/Fallbacks"); };
-  int pickedFallbacks = 0, pickedGrazes = 0;
+  int pickedFallbacks = 0, pickedGrazes = 0, pickedRejected = 0;
   std::map<std::string, int64_t> picking;
   TraversalConfig oracle;
   oracle.baseline = "bruteforce";
@@ -399,6 +399,29 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
         }
         pickedFallbacks += std::min(picked, 4);
         for (const auto& [name, v] : Stats::snapshot()) {  // the picking is not the parity run
+          const auto b = before.find(name);
+          picking[name] += v - (b == before.end() ? 0 : b->second);
+        }
+      }
+      // Rays whose inversion is refused by its residual, picked the same way (as the
+      // parity run below traces them: far rays moved first): a piece starting beyond the
+      // closest hit is skipped before its points are made, so the families alone may not
+      // reach one (then that piece's interval goes by boxes).
+      {
+        const std::map<std::string, int64_t> before = Stats::snapshot();
+        const SceneReach reach = sceneReach(oneTriangleScene(T, s.disp));
+        int picked = 0;
+        for (const test::RayCase& c : test::rayFamilies(one, *bf, 16 * kRaysPerFamily, uint32_t(9000 + 17 * si + k))) {
+          const NearRay near = nearScene(c.r, reach);
+          if (near.misses || box.intersect(near.ray).isEmpty()) continue;  // Embree would not call the traversal
+          const int64_t r0 = statValue("traversal/RejectedInversions");
+          RayCounters cw;
+          TriangleHit h;
+          cpu->intersect(near.ray, 0, h, cw);
+          if (statValue("traversal/RejectedInversions") > r0 && picked++ < 4) cases.push_back(c);
+        }
+        pickedRejected += std::min(picked, 4);
+        for (const auto& [name, v] : Stats::snapshot()) {
           const auto b = before.find(name);
           picking[name] += v - (b == before.end() ? 0 : b->second);
         }
@@ -476,12 +499,13 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
   fmt::print("vulkan step parity, CPU branches reached{}: newton/Inversions {}, newton/Fallbacks (cubic) {}, "
              "traversal/RejectedInversions {}, traversal/TurningSplits {}, traversal/BoxOnlyPrisms {}, "
              "traversal/IllPosedTriangles {}, traversal/MarchStops {}, traversal/PrismGrazes {}, "
-             "traversal/StackOverflows {}, traversal/WideLeaves {}, traversal/ClippedCells {}\n",
+             "traversal/StackOverflows {}, traversal/WideLeaves {}, traversal/ClippedCells {}, "
+             "traversal/BoxOnlyPieces {}\n",
              stats1.empty() ? " (statistics not compiled in)" : "", delta("newton/Inversions"),
              delta("newton/Fallbacks"), delta("traversal/RejectedInversions"), delta("traversal/TurningSplits"),
              delta("traversal/BoxOnlyPrisms"), delta("traversal/IllPosedTriangles"), delta("traversal/MarchStops"),
              delta("traversal/PrismGrazes"), delta("traversal/StackOverflows"), delta("traversal/WideLeaves"),
-             delta("traversal/ClippedCells"));
+             delta("traversal/ClippedCells"), delta("traversal/BoxOnlyPieces"));
   // The branches these families reach, held: a family change that stops reaching one
   // would leave that branch's GPU mirror unchecked (stack overflows are the shallow-stack
   // test's).
@@ -493,7 +517,9 @@ TEST_CASE("vulkan: one triangle, the GPU runs the CPU's traversal step for step"
     CHECK(delta("traversal/BoxOnlyPrisms") > 0);
     CHECK(delta("traversal/IllPosedTriangles") > 0);
     CHECK(delta("traversal/MarchStops") > 0);
+    CHECK(pickedRejected > 0);
     CHECK(delta("traversal/RejectedInversions") > 0);  // the float inversion's claim refused
+    CHECK(delta("traversal/BoxOnlyPieces") > 0);  // a pending point refused: its piece by boxes
     CHECK(pickedGrazes > 0);
     CHECK(delta("traversal/PrismGrazes") > 0);  // the box-only traversal of a grazed prism
     CHECK(delta("traversal/ClippedCells") > 0);  // the micro-cells' clip (core/kernels/microcells.h)

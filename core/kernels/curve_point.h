@@ -63,22 +63,18 @@ OBLONG_INLINE double heightOnLine(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) X, O
   return s;
 }
 
-// The claim at t between curve points a and b, without an inversion: uv interpolated
-// linearly in t (exact where T's normals are parallel), s by least squares, then one
-// Newton step on G(b, s) = X(t) in double (J = [∂G/∂u, ∂G/∂v, N], G bilinear in (b, s),
-// Cramer's rule). False when J is singular; makePoint bounds the claim's error.
-OBLONG_INLINE bool claimBetween(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
-                                OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, double t, OBLONG_OUT(dvec2) nb,
-                                OBLONG_OUT(double) ns) {
+// One Newton step on G(b, s) = X(t) in double from barycentrics bc, with s its least
+// squares height on bc's displacement line (J = [∂G/∂u, ∂G/∂v, N], G bilinear in (b, s),
+// Cramer's rule): the claim (nb, ns). False when J is singular; makePoint bounds the
+// claim's error whatever it is.
+OBLONG_INLINE bool newtonClaim(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, double t,
+                               OBLONG_IN(dvec2) bc, OBLONG_OUT(dvec2) nb, OBLONG_OUT(double) ns) {
   nb = dvec2(0.0);
   ns = 0.0;
-  OBLONG_PRECISE double tau = (t - a.t) / (b.t - a.t);
-  OBLONG_PRECISE dvec2 g = a.uv + tau * (b.uv - a.uv);
-  dvec2 bc = frameBary(F, g);
   OBLONG_PRECISE dvec3 X = O + t * D;
   dvec3 N = frameN(F, bc);
-  OBLONG_PRECISE double s = dotD(X - frameP(F, bc), N) / dotD(N, N);
-  OBLONG_PRECISE dvec3 r = X - (frameP(F, bc) + s * frameN(F, bc));
+  double s = heightOnLine(F, X, bc);
+  OBLONG_PRECISE dvec3 r = X - (frameP(F, bc) + s * N);
   OBLONG_PRECISE dvec3 Gu = F.e1 + s * F.f1, Gv = F.e2 + s * F.f2;
   dvec3 c0 = crossD(Gv, N), c1 = crossD(N, Gu), c2 = crossD(Gu, Gv);
   double det = dotD(Gu, c0);
@@ -88,6 +84,14 @@ OBLONG_INLINE bool claimBetween(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBL
   nb = b1;
   ns = s1;
   return true;
+}
+
+// The uv at t on the chord between curve points a and b (linear in t: exact where T's
+// normals are parallel), where a claim between them starts (newtonClaim).
+OBLONG_INLINE dvec2 chordUv(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, double t) {
+  OBLONG_PRECISE double tau = (t - a.t) / (b.t - a.t);
+  OBLONG_PRECISE dvec2 g = a.uv + tau * (b.uv - a.uv);
+  return g;
 }
 
 OBLONG_KERNELS_END

@@ -5,8 +5,10 @@
 // triangle (docs/traversal.md has the reasoning):
 //   1. Clip the ray to the triangle's inflated prism; its crossings give [tIn, tOut] and
 //      the uv of its ends; a ray starting (or ending) inside gets its end's uv from a point
-//      claimed between the crossings (pointBetween), else by inversion.
+//      claimed between the crossings (claimNear), else by inversion.
 //   2. Split [tIn, tOut] where the curve may turn (ψ's turning points): monotone pieces.
+//      The ends inside and the turning points are made when their piece is first popped,
+//      at processPiece's one call site of the claim and of the inverter.
 //   3. A fixed-size stack of pieces, front to back. A piece whose rectangle is at most
 //      `marchingScale` texels is marched; otherwise its rectangle, dilated by ε and snapped
 //      outward to whole cells, is bounded (range query + interval arithmetic), the ray is
@@ -59,6 +61,13 @@
 #define OBLONG_RP_STAT_WIDE_LEAF 7
 #define OBLONG_RP_STAT_LEAF 8
 #define OBLONG_RP_STAT_BAD_INVERSION 9
+
+// A curve point setupCurve leaves to processPiece (an end of the ray inside the prism, a
+// turning point): its t is known, and pad.x (negative, which a made point's pad never is)
+// says how to make it.
+#define OBLONG_RP_PENDING_CLAIM (-1.0)   // claimed from uv (on the chord between the crossings), else inverted
+#define OBLONG_RP_PENDING_INVERT (-2.0)  // an end: inverted
+#define OBLONG_RP_PENDING_TURN (-3.0)    // a turning point: inverted
 
 OBLONG_KERNELS_BEGIN
 

@@ -5,7 +5,8 @@
 //
 // The `g_` variables are the state of one ray against one triangle: C++ members, GLSL
 // globals. Each large step has one call site (the cells to test come from one generator,
-// nextCell, tested at one place in rpLoop; the inversions of a piece share one call):
+// nextCell, tested at one place in rpLoop; every claim near a known point and every
+// inversion is made in processPiece's one loop):
 // GLSL inlines every call, and the inlined size is what the shader compiler pays for.
 
 // ---- the state ------------------------------------------------------------------------
@@ -127,33 +128,36 @@ bool crossingAt(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, do
   return found == 1;
 }
 
-// The curve point at t between curve points a and b without an inversion: uv linear in t
-// (exact where T's normals are parallel), s by least squares, one Newton step in double;
+// The curve point at t without an inversion, from uv g near it (on the chord between two
+// curve points, chordUv): s by least squares, one Newton step in double (newtonClaim);
 // makePoint's residual bound holds for any claim. Refused when its pad exceeds
 // OBLONG_TRAV_CLAIM_PAD.
-bool pointBetween(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, double t, OBLONG_OUT(CurvePoint) outp) {
+bool claimNear(double t, OBLONG_IN(dvec2) g, OBLONG_OUT(CurvePoint) outp) {
   outp.t = t;
   outp.uv = dvec2(0.0);
   outp.pad = dvec2(0.0);
   dvec2 nb;
   double ns;
-  if (!claimBetween(g_F, g_O, g_D, a, b, t, nb, ns)) return false;
+  if (!newtonClaim(g_F, g_O, g_D, t, frameBary(g_F, g), nb, ns)) return false;
   if (!claimPoint(t, nb, ns, outp)) return false;
   return outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD;
 }
 
 // The curve point at t from the closest hit instead of an inversion: the hit's texture
-// position gives T's barycentrics, s is the least-squares height of X(t) on their
-// displacement line; makePoint's residual bounds the error as for any claim.
+// position gives T's barycentrics, from which one Newton step in double claims (b, s)
+// (newtonClaim: the hit lies on a flat micro-triangle, off the displacement line through
+// its barycentrics by the micro-surface's bulge); makePoint's residual bounds the error
+// as for any claim.
 bool pointFromHit(double t, OBLONG_OUT(CurvePoint) outp) {
   outp.t = t;
   outp.uv = dvec2(0.0);
   outp.pad = dvec2(0.0);
   if (!OBLONG_HOOK(rpHitFound)()) return false;
   OBLONG_PRECISE dvec2 loc = OBLONG_HOOK(rpToSample)(OBLONG_HOOK(rpHitUV)()) - dvec2(g_origin);
-  dvec2 b = frameBary(g_F, loc);
-  OBLONG_PRECISE dvec3 X = g_O + t * g_D;
-  return claimPoint(t, b, heightOnLine(g_F, X, b), outp);
+  dvec2 nb;
+  double ns;
+  if (!newtonClaim(g_F, g_O, g_D, t, frameBary(g_F, loc), nb, ns)) return false;
+  return claimPoint(t, nb, ns, outp);
 }
 
 // ---- boxes ---------------------------------------------------------------------------------
@@ -280,13 +284,16 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   g_mStop = dvec2(0.0);
 }
 
-// False when no cell of the marched piece can hold a better hit.
+// False when no cell of the marched piece can hold a better hit. The stop's point is
+// claimed from the hit; where makePoint refuses the claim the march runs on without a
+// stop (a saving only, so no inversion is spent on it: none was needed on the shipped and
+// paper scenes once pointFromHit took its Newton step).
 bool setStop() {
   g_mStopSet = true;
   double tStar = bestLimit();
   if (tStar <= g_ma.t) return false;
   CurvePoint m;
-  if (tStar < g_mb.t && (pointFromHit(tStar, m) || invertAt(tStar, m)))
+  if (tStar < g_mb.t && pointFromHit(tStar, m))
     for (int k = 0; k < 2; ++k)
       if (g_mCertain[k]) {
         OBLONG_PRECISE double margin = m.pad[k] + g_ma.pad[k] + g_mb.pad[k];
@@ -360,8 +367,7 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
       g_mK += g_mSa;
       continue;
     }
-    // The first hit found bounds the march: setStop has this one call site, so that its
-    // inversion is inlined once in the shader.
+    // The first hit found bounds the march (setStop, from this one call site).
     if (!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) {
       OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
       return false;
@@ -438,31 +444,55 @@ void leafPiece(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   pushBox(clo, chi, a.t, min(b.t, bestLimit()));
 }
 
+bool pending(OBLONG_IN(CurvePoint) p) { return p.pad.x < 0.0; }
+CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
+  CurvePoint p;
+  p.t = t;
+  p.uv = g;
+  p.pad = dvec2(how, 0.0);
+  return p;
+}
+
 void processPiece(CurvePoint a, CurvePoint b) {
   if (a.t > bestLimit()) return;
-  if (pieceSmall(a, b)) {
-    leafPiece(a, b);
-    return;
+  // An end setupCurve left pending is made first, in the loop below, and the piece goes
+  // back on the stack: the loop is the one call site of the claim and of the inverter.
+  bool pendA = pending(a), pend = pendA || pending(b);
+  ivec2 clo = ivec2(0), chi = ivec2(0);
+  double t0 = a.t, t1 = b.t;
+  OBLONG_PRECISE double minGain = 0.0;
+  if (!pend) {
+    if (pieceSmall(a, b)) {
+      leafPiece(a, b);
+      return;
+    }
+    if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+    t1 = min(b.t, bestLimit());
+    if (!clipToCells(clo, chi, t0, t1)) return;
+    // The clipped ends are worth a new point (Fig. 5a: their projections can give a much
+    // smaller rectangle) when they gain this much.
+    OBLONG_PRECISE dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
+    OBLONG_PRECISE double gainDt = b.t - a.t;
+    minGain = max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
   }
-  ivec2 clo, chi;
-  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
-  double t0 = a.t, t1 = min(b.t, bestLimit());
-  if (!clipToCells(clo, chi, t0, t1)) return;
-  // Up to three inversions at one call site: the clipped ends (Fig. 5a: their
-  // projections can give a much smaller rectangle), then the split's point when the
-  // splitter asks for the curve point at a t.
-  OBLONG_PRECISE dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
-  OBLONG_PRECISE double gainDt = b.t - a.t;
-  OBLONG_PRECISE double minGain =
-      max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
+  // Up to three points at one call site: a pending end (e = -1), or the clipped ends
+  // (inversion during traversal) and then the split's point when the splitter asks for
+  // the curve point at a t.
   CurvePoint m;
   bool ok = false;
-  for (int e = g_inversionInTraversal ? 0 : 2; e < 3; ++e) {
-    bool need;
+  for (int e = pend ? -1 : (g_inversionInTraversal ? 0 : 2); e < (pend ? 0 : 3); ++e) {
+    bool need = true, claim = e < 2;
     double t = 0.0;  // set on every path that reads it; GCC cannot tell
-    if (e < 2) {
+    dvec2 g = dvec2(0.0);
+    if (e < 0) {
+      CurvePoint p = pendA ? a : b;
+      t = p.t;
+      g = p.uv;
+      claim = p.pad.x == OBLONG_RP_PENDING_CLAIM;
+    } else if (e < 2) {
       need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
       t = e == 0 ? t0 : t1;
+      g = chordUv(a, b, t);
     } else {
       if (pieceSmall(a, b)) {
         leafPiece(a, b);
@@ -478,14 +508,31 @@ void processPiece(CurvePoint a, CurvePoint b) {
       need = r == 2;
     }
     CurvePoint q;
-    if (need && ((e < 2 && pointBetween(a, b, t, q)) || invertAt(t, q))) {
-      if (e == 0) a = q;
+    if (need && ((claim && claimNear(t, g, q)) || invertAt(t, q))) {
+      if (e < 0) {
+        if ((pendA ? a : b).pad.x == OBLONG_RP_PENDING_TURN) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);
+        if (pendA) a = q;
+        else b = q;
+        ok = true;
+      } else if (e == 0) a = q;
       else if (e == 1) b = q;
       else {
         m = q;
         ok = true;
       }
     }
+  }
+  if (pend) {
+    if (!ok) {  // no point: this piece's interval by boxes over all of T's cells
+      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PIECE);
+      pushBox(g_cellLo, g_cellHi, a.t, min(b.t, bestLimit()));
+      return;
+    }
+    // The piece below starts where this one ends (setupCurve pushed them in order).
+    if (!pendA && g_sp > 0 && !g_st[g_sp - 1].box && pending(g_st[g_sp - 1].a) && g_st[g_sp - 1].a.t == b.t)
+      g_st[g_sp - 1].a = b;
+    pushPiece(a, b);
+    return;
   }
   if (!ok) {
     OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PIECE);
@@ -582,36 +629,28 @@ int setupCurve() {
   if (!(tIn <= tOut)) return 0;
   g_psi = psiMake(g_F, g_O, g_D);
   g_dvd = dirLocal();
-  // 2. Monotone pieces, between ψ's turning points. Their curve points, at one call site
-  // of the inversion: the two ends (the crossings', or where the ray starts or ends
-  // inside, claimed between them or inverted), then the turning points; a failure falls
-  // back to boxes.
+  // 2. Monotone pieces, between ψ's turning points. Their ends on the prism are the
+  // crossings' claims; an end inside the prism (where the ray starts or ends) and the
+  // turning points are left pending, made by processPiece when their piece is popped.
   double ts[4];
   int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, ts);
   CurvePoint pts[6];
   CurvePoint F, L;
   bool okF = claimPoint(first.t, first.bary, first.s, F), okL = claimPoint(last.t, last.bary, last.s, L);
-  bool okEnds = true;
-  for (int k = 0; k < ns + 2; ++k) {
-    if (k == 2 && !okEnds) return 1;
-    Crossing c = k == 0 ? first : last;
-    double t = k == 0 ? tIn : (k == 1 ? tOut : ts[k - 2]);
-    bool ok;
+  for (int k = 0; k < 2; ++k) {
+    double t = k == 0 ? tIn : tOut;
     CurvePoint p;
-    if (k < 2 && t == c.t) {
+    if (t == (k == 0 ? first.t : last.t)) {
+      if (!(k == 0 ? okF : okL)) return 1;
       p = k == 0 ? F : L;
-      ok = k == 0 ? okF : okL;
+    } else if (okF && okL) {
+      p = pendingPoint(t, chordUv(F, L, t), OBLONG_RP_PENDING_CLAIM);
     } else {
-      ok = (k < 2 && okF && okL && pointBetween(F, L, t, p)) || invertAt(t, p);
+      p = pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT);
     }
-    if (k >= 2) {
-      if (!ok) return 1;
-      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);
-    }
-    okEnds = okEnds && ok;
-    pts[k == 0 ? 0 : (k == 1 ? ns + 1 : k - 1)] = p;
+    pts[k == 0 ? 0 : ns + 1] = p;
   }
-  if (!okEnds) return 1;
+  for (int k = 0; k < ns; ++k) pts[k + 1] = pendingPoint(ts[k], dvec2(0.0), OBLONG_RP_PENDING_TURN);
   g_sp = 0;
   for (int k = ns; k >= 0; --k) pushPiece(pts[k], pts[k + 1]);
   return 2;
