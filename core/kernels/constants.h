@@ -116,7 +116,7 @@
 
 // Where ε exceeds this fraction of the marching scale (float rounding at a fine texel),
 // pieces up to OBLONG_TRAV_WIDE_LEAF_EPS ε (samples) are leaves, subdivided as boxes down
-// to blocks of OBLONG_TRAV_WIDE_BOX_CELLS cells per axis (leafPiece). Chosen on the
+// to blocks of OBLONG_TRAV_WIDE_BOX_CELLS cells per axis (wideLeaf). Chosen on the
 // roof at 100² tiling (ε above a texel on many pieces): 342 steps per camera ray with marched leaves, 147
 // with these (tfdm: 188).
 #define OBLONG_TRAV_WIDE_EPS_REL 0.25

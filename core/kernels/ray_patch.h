@@ -68,15 +68,16 @@
 #define OBLONG_RP_PENDING_CLAIM (-1.0)   // claimed from uv (on the chord between the crossings), else inverted
 #define OBLONG_RP_PENDING_INVERT (-2.0)  // an end: inverted
 #define OBLONG_RP_PENDING_TURN (-3.0)    // a turning point: inverted
+// A stack entry that is a box: a.pad.x holds this, a.uv and b.uv its local cells' corners
+// (clo, chi: integers, exact in double), a.t and b.t its ray interval.
+#define OBLONG_RP_BOX_ENTRY (-4.0)
 
 OBLONG_KERNELS_BEGIN
 
-// A stack entry: a piece of the curve (a, b), or a box of local cells with its ray interval.
+// A stack entry: a piece of the curve (a, b), or a box of local cells with its ray
+// interval in the same fields (OBLONG_RP_BOX_ENTRY): 80 bytes, the stack's whole state.
 struct RpEntry {
-  CurvePoint a, b;  // curve mode
-  ivec4 cells;      // box mode: local cell range (clo, chi)
-  double ta, tb;    // box mode: ray interval
-  bool box;
+  CurvePoint a, b;
 };
 
 // The rounding of the ray's own arithmetic (RayMargins): the error of a ray point for

@@ -200,16 +200,18 @@ void testCell(int i, int j) {
 void pushPiece(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   g_st[g_sp].a = a;
   g_st[g_sp].b = b;
-  g_st[g_sp].box = false;
   ++g_sp;
 }
 void pushBox(OBLONG_IN(ivec2) lo, OBLONG_IN(ivec2) hi, double ta, double tb) {
-  g_st[g_sp].cells = ivec4(lo.x, lo.y, hi.x, hi.y);
-  g_st[g_sp].ta = ta;
-  g_st[g_sp].tb = tb;
-  g_st[g_sp].box = true;
+  g_st[g_sp].a.t = ta;
+  g_st[g_sp].a.uv = dvec2(lo);
+  g_st[g_sp].a.pad = dvec2(OBLONG_RP_BOX_ENTRY, 0.0);
+  g_st[g_sp].b.t = tb;
+  g_st[g_sp].b.uv = dvec2(hi);
+  g_st[g_sp].b.pad = dvec2(0.0);
   ++g_sp;
 }
+bool isBox(OBLONG_IN(RpEntry) e) { return e.a.pad.x == OBLONG_RP_BOX_ENTRY; }
 
 // Local cells touching [lo, hi], clipped to T's cells. False when empty.
 bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
@@ -429,15 +431,11 @@ bool pieceSmall(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   return ext[la] <= g_leafScale || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
 }
 
-// A piece too small to split is marched, unless ε (float rounding at a fine texel) is
-// wide against the marching scale; then its cells are subdivided as boxes, down to blocks
-// of OBLONG_TRAV_WIDE_BOX_CELLS, which prune across the curve where the march would test
-// every cell within ε of it.
-void leafPiece(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
-  if (!g_wideEps) {
-    startMarch(a, b);
-    return;
-  }
+// A piece too small to split is marched (processPiece), unless ε (float rounding at a
+// fine texel) is wide against the marching scale; then its cells are subdivided as boxes,
+// down to blocks of OBLONG_TRAV_WIDE_BOX_CELLS, which prune across the curve where the
+// march would test every cell within ε of it.
+void wideLeaf(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_WIDE_LEAF);
   ivec2 clo, chi;
   if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
@@ -461,11 +459,10 @@ void processPiece(CurvePoint a, CurvePoint b) {
   ivec2 clo = ivec2(0), chi = ivec2(0);
   double t0 = a.t, t1 = b.t;
   OBLONG_PRECISE double minGain = 0.0;
-  if (!pend) {
-    if (pieceSmall(a, b)) {
-      leafPiece(a, b);
-      return;
-    }
+  // Not split: 1 = a leaf, 2 = marched at a stack overflow (one call site of the march).
+  int leaf = 0;
+  if (!pend && pieceSmall(a, b)) leaf = 1;
+  if (!pend && leaf == 0) {
     if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
     t1 = min(b.t, bestLimit());
     if (!clipToCells(clo, chi, t0, t1)) return;
@@ -480,7 +477,7 @@ void processPiece(CurvePoint a, CurvePoint b) {
   // the curve point at a t.
   CurvePoint m;
   bool ok = false;
-  for (int e = pend ? -1 : (g_inversionInTraversal ? 0 : 2); e < (pend ? 0 : 3); ++e) {
+  for (int e = pend ? -1 : (g_inversionInTraversal ? 0 : 2); leaf == 0 && e < (pend ? 0 : 3); ++e) {
     bool need = true, claim = e < 2;
     double t = 0.0;  // set on every path that reads it; GCC cannot tell
     dvec2 g = dvec2(0.0);
@@ -495,13 +492,13 @@ void processPiece(CurvePoint a, CurvePoint b) {
       g = chordUv(a, b, t);
     } else {
       if (pieceSmall(a, b)) {
-        leafPiece(a, b);
-        return;
+        leaf = 1;
+        break;
       }
       if (g_sp + 2 > g_stackDepth) {  // overflow: correct, just not hierarchical
         OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_OVERFLOW);
-        startMarch(a, b);
-        return;
+        leaf = 2;
+        break;
       }
       int r = OBLONG_HOOK(rpSplit)(a, b, m, t);
       ok = r == 1;
@@ -522,6 +519,11 @@ void processPiece(CurvePoint a, CurvePoint b) {
       }
     }
   }
+  if (leaf != 0) {
+    if (leaf == 1 && g_wideEps) wideLeaf(a, b);
+    else startMarch(a, b);
+    return;
+  }
   if (pend) {
     if (!ok) {  // no point: this piece's interval by boxes over all of T's cells
       OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PIECE);
@@ -529,7 +531,7 @@ void processPiece(CurvePoint a, CurvePoint b) {
       return;
     }
     // The piece below starts where this one ends (setupCurve pushed them in order).
-    if (!pendA && g_sp > 0 && !g_st[g_sp - 1].box && pending(g_st[g_sp - 1].a) && g_st[g_sp - 1].a.t == b.t)
+    if (!pendA && g_sp > 0 && !isBox(g_st[g_sp - 1]) && pending(g_st[g_sp - 1].a) && g_st[g_sp - 1].a.t == b.t)
       g_st[g_sp - 1].a = b;
     pushPiece(a, b);
     return;
@@ -588,7 +590,7 @@ void rpLoop() {
     if (g_sp == 0) break;
     --g_sp;
     RpEntry e = g_st[g_sp];
-    if (e.box) processBox(ivec2(e.cells.x, e.cells.y), ivec2(e.cells.z, e.cells.w), e.ta, e.tb);
+    if (isBox(e)) processBox(ivec2(e.a.uv), ivec2(e.b.uv), e.a.t, e.b.t);
     else processPiece(e.a, e.b);
   }
 }
@@ -635,16 +637,20 @@ int setupCurve() {
   double ts[4];
   int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, ts);
   CurvePoint pts[6];
-  CurvePoint F, L;
-  bool okF = claimPoint(first.t, first.bary, first.s, F), okL = claimPoint(last.t, last.bary, last.s, L);
+  CurvePoint ends[2];  // the crossings' points (one call site of the claim)
+  bool ok[2];
+  for (int k = 0; k < 2; ++k) {
+    Crossing c = k == 0 ? first : last;
+    ok[k] = claimPoint(c.t, c.bary, c.s, ends[k]);
+  }
   for (int k = 0; k < 2; ++k) {
     double t = k == 0 ? tIn : tOut;
     CurvePoint p;
     if (t == (k == 0 ? first.t : last.t)) {
-      if (!(k == 0 ? okF : okL)) return 1;
-      p = k == 0 ? F : L;
-    } else if (okF && okL) {
-      p = pendingPoint(t, chordUv(F, L, t), OBLONG_RP_PENDING_CLAIM);
+      if (!ok[k]) return 1;
+      p = ends[k];
+    } else if (ok[0] && ok[1]) {
+      p = pendingPoint(t, chordUv(ends[0], ends[1], t), OBLONG_RP_PENDING_CLAIM);
     } else {
       p = pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT);
     }
