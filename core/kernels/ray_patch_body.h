@@ -462,10 +462,15 @@ void processPiece(CurvePoint a, CurvePoint b) {
   // Not split: 1 = a leaf, 2 = marched at a stack overflow (one call site of the march).
   int leaf = 0;
   if (!pend && pieceSmall(a, b)) leaf = 1;
-  if (!pend && leaf == 0) {
+  if (!pend) {
     if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
-    t1 = min(b.t, bestLimit());
-    if (!clipToCells(clo, chi, t0, t1)) return;
+    // A marched leaf of two cells or more is box-tested first: a missed box skips it.
+    if (leaf == 0 || (!g_wideEps && (clo.x != chi.x || clo.y != chi.y))) {
+      t1 = min(b.t, bestLimit());
+      if (!clipToCells(clo, chi, t0, t1)) return;
+    }
+  }
+  if (!pend && leaf == 0) {
     // The clipped ends are worth a new point (Fig. 5a: their projections can give a much
     // smaller rectangle) when they gain this much.
     OBLONG_PRECISE dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
