@@ -41,3 +41,18 @@ for method in ("canonical", "tfdm"):
             print(f"{'':9} counters: {'; '.join(diffs) if diffs else 'identical'}")
     if ratios:
         print(f"{method}: geomean of all {len(ratios)} ratios: {math.exp(sum(map(math.log, ratios)) / len(ratios)):.3f}")
+
+# tfdm's time over the canonical's within each build and round (the speed-up), median of
+# the rounds, and its geometric mean over scenes and families.
+for build in ("old", "new"):
+    meds = []
+    for scene in scenes:
+        for family in ("primary", "secondary", "grazing"):
+            v = [runs[(scene, family, "tfdm", build, r)]["cpu_time"] / runs[(scene, family, "canonical", build, r)]["cpu_time"]
+                 for r in rounds if (scene, family, "tfdm", build, r) in runs and (scene, family, "canonical", build, r) in runs]
+            if not v:
+                continue
+            meds.append(statistics.median(v))
+            print(f"{build} {scene:16} {family:9} tfdm/canonical median {statistics.median(v):.2f} ({min(v):.2f}-{max(v):.2f})")
+    if meds:
+        print(f"{build}: geomean of the median speed-ups {math.exp(sum(map(math.log, meds)) / len(meds)):.2f}")
