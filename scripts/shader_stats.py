@@ -104,6 +104,14 @@ def main() -> int:
                 print(f"shader_stats: {name}: {counts[name]['instructions']} instructions, over its budget of "
                       f"{ceiling} ({args.budget})", file=sys.stderr)
                 failed = True
+        # Only the modules the budget lists may declare Float64 (a GPU without
+        # shaderFloat64 cannot load the others either).
+        allowed = set(budget.get("float64_allowed", []))
+        for name, c in counts.items():
+            if c["float64_capability"] and name not in allowed:
+                print(f"shader_stats: {name}: declares the Float64 capability, which {args.budget} allows only "
+                      f"in {', '.join(sorted(allowed)) or 'no module'}", file=sys.stderr)
+                failed = True
         if failed:
             return 1
     return 0

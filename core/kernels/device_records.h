@@ -8,9 +8,14 @@
 #ifndef OBLONG_VULKAN_SHARED_H
 #define OBLONG_VULKAN_SHARED_H
 
+// A shader that defines OBLONG_RECORDS_NO_TRIANGLES before including this (the ray
+// generation, miss and closest-hit stages) sees no TriGpu and no double: its SPIR-V then
+// declares no Float64 capability.
+#ifndef OBLONG_RECORDS_NO_TRIANGLES
 #include "core/kernels/curve_point.h"  // ClaimBounds
 #include "core/kernels/microcells.h"   // McEdges, McTri
 #include "core/kernels/patch_math.h"   // PatchFrame
+#endif
 
 #ifdef __cplusplus
 #include <glm/glm.hpp>
@@ -25,6 +30,7 @@ using glm::dvec2;
 using glm::dvec3;
 using glm::ivec2;
 using glm::ivec4;
+using glm::uvec2;
 using glm::vec2;
 using glm::vec3;
 using glm::vec4;
@@ -83,6 +89,7 @@ struct CountersGpu {
   int pad;
 };
 
+#ifndef OBLONG_RECORDS_NO_TRIANGLES
 // One displaced base triangle: DisplacedTriangle, its PrismParams, LocalFrame and what
 // MicroCells reads (traversal/traversal_mesh.h, psi.h, core/kernels/microcells.h),
 // precomputed on the host by the very code the CPU runs.
@@ -113,13 +120,16 @@ struct TriGpu {
   int valid, wellPosed;
   int obbValid, pad1;       // PrismOBB::valid()
 };
+#endif
 
 // One mesh of the scene (the TLAS instance's custom index).
 struct MeshGpu {
-  // Mesh::origin. The instances' transforms are the identity (a double origin is not a
-  // float transform): displaced prisms' boxes are in the world, and the intersection
-  // shader moves the world ray into the frame as EmbreeScene's callbacks do.
-  dvec3 origin;
+  // Mesh::origin, each double as its two 32-bit words, low first (packDouble2x32): the
+  // record holds no double, so the stages that read it need no Float64. The instances'
+  // transforms are the identity (a double origin is not a float transform): displaced
+  // prisms' boxes are in the world, and the intersection shader moves the world ray into
+  // the frame as EmbreeScene's callbacks do.
+  uvec2 originBits[3];
   uint triOffset;   // first TriGpu of this mesh (displaced)
   uint texelOffset; // first texel of its height map
   int W, H;         // map size
@@ -154,7 +164,7 @@ struct MeshGpu {
   // tfStored the number of stored levels).
   int method;
   int tfStored;
-  int pad1;
+  int pad1, pad2;  // a size that is a multiple of 8
 };
 
 #define OBLONG_METHOD_CANONICAL 0

@@ -15,6 +15,8 @@
 #include "render/vulkan/rmip_layout.h"
 #include "strategies/rmip.h"
 
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 
@@ -218,7 +220,10 @@ GpuRecords buildRecords(const Scene& scene, const AccelOptions& opts, nlohmann::
     const SceneMesh& sm = scene.meshes[mi];
     const Mesh& mesh = sm.mesh;
     MeshGpu& m = meshes[mi];
-    m.origin = mesh.origin;
+    for (int k = 0; k < 3; ++k) {
+      const auto w = std::bit_cast<std::array<uint32_t, 2>>(mesh.origin[k]);  // low word first (little-endian)
+      m.originBits[k] = glm::uvec2(w[0], w[1]);
+    }
     m.method = method.method;
     R.baseTriangles += mesh.triangles.size();
     if (!sm.displacement) {

@@ -11,7 +11,9 @@ layout(set = 0, binding = OBLONG_BIND_TLAS) uniform accelerationStructureEXT tla
 layout(set = 0, binding = OBLONG_BIND_RAYS, scalar) readonly buffer Rays { RayGpu rays[]; };
 layout(set = 0, binding = OBLONG_BIND_HITS, scalar) writeonly buffer Hits { HitGpu hits[]; };
 layout(set = 0, binding = OBLONG_BIND_COUNTERS, scalar) buffer Counters { CountersGpu counters[]; };
+#ifndef OBLONG_RECORDS_NO_TRIANGLES
 layout(set = 0, binding = OBLONG_BIND_TRIANGLES, scalar) readonly buffer Tris { TriGpu tris[]; };
+#endif
 layout(set = 0, binding = OBLONG_BIND_MESHES, scalar) readonly buffer Meshes { MeshGpu meshes[]; };
 layout(set = 0, binding = OBLONG_BIND_TEXELS, scalar) readonly buffer Texels { float v[]; } texelChunks[OBLONG_CHUNKS];
 layout(set = 0, binding = OBLONG_BIND_RMIP_DATA, scalar) readonly buffer RmipData { uint v[]; } rmipChunks[OBLONG_CHUNKS];

@@ -1,6 +1,7 @@
 #version 460
 // Closest hit of a displaced prism: the intersection shader already computed the hit's
 // texture coordinates and micro-triangle normal.
+#define OBLONG_RECORDS_NO_TRIANGLES  // no double: no Float64 capability
 #include "common.glsl"
 
 layout(location = 0) rayPayloadInEXT PayloadGpu pl;

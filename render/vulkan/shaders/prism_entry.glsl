@@ -18,7 +18,9 @@ bool beginPrism() {
   // back to double, and lavapipe's compiler folds double(float(x)) into x: the shader
   // then traced the unrounded origin (measured: 4614 of 7168 rays bit-identical to the
   // CPU on the tiled quad moved by (12345.678, -271.828, 3.3); 7168 with the xor).
-  precise dvec3 o = dvec3(gl_WorldRayOriginEXT) - g_mesh.origin;
+  dvec3 origin = dvec3(packDouble2x32(g_mesh.originBits[0]), packDouble2x32(g_mesh.originBits[1]),
+                       packDouble2x32(g_mesh.originBits[2]));
+  precise dvec3 o = dvec3(gl_WorldRayOriginEXT) - origin;
   vec3 of = uintBitsToFloat(floatBitsToUint(vec3(o)) ^ uvec3(g_mesh.zero));
   initPatch(of, gl_WorldRayDirectionEXT, gl_RayTminEXT, gl_RayTmaxEXT);
   return true;

@@ -1,6 +1,7 @@
 #version 460
 // Closest hit of an undisplaced mesh (built-in triangle geometry): uv interpolated and
 // the unit geometric normal (v1 − v0) × (v2 − v0), as EmbreeScene::intersect reports.
+#define OBLONG_RECORDS_NO_TRIANGLES  // no double: no Float64 capability
 #include "common.glsl"
 
 layout(location = 0) rayPayloadInEXT PayloadGpu pl;
