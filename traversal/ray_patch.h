@@ -104,8 +104,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
         ray_(ray),
         tex_(mesh.texFrames[prim]),
         blend_(mesh.disp.blendOf(ray.lod)),
-        watertightRay_(rc.wt),
-        invM_(invNormalLengthBound(tri_.minNormalLength)) {
+        watertightRay_(rc.wt) {
     const PrismParams& P = mesh.params[prim];
     const LocalFrame& F = mesh.frames[prim];
     Loop& s = *this;
@@ -118,8 +117,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
     s.g_O = rc.o;
     s.g_D = rc.d;
     s.g_invD = rc.invD;
-    s.g_Ot = tex_.rot(rc.o);
-    s.g_invDt = 1.0 / tex_.rot(rc.d);
+    s.g_bray = shared::boxRayF(tex_.rot(rc.o), tex_.rot(rc.d), tex_.Pc);
     const CellRange& cr = mesh.cells[prim];
     s.g_origin = F.origin;
     s.g_cellLo = ivec2(cr.x0, cr.y0) - F.origin;
@@ -137,8 +135,8 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
     const double budget = mesh.originBudget[prim];
     const BoxD tb = maxO <= budget ? mesh.texPrismBox(prim, mesh.budgetPad[prim], budget)
                                    : mesh.texPrismBox(prim, s.g_boxPad, maxO);
-    s.g_texLo = tb.lo;
-    s.g_texHi = tb.hi;
+    s.g_texLo = shared::relBelowF(tb.lo, tex_.Pc);
+    s.g_texHi = shared::relAboveF(tb.hi, tex_.Pc);
     if (maxO <= budget) {
       prism_ = &mesh.prisms[prim];
       inflatedBox_ = mesh.inflatedBoxes[prim];
@@ -228,9 +226,8 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
     return double(h.b0) * dvec2(m.v[0].uv) + double(h.b1) * dvec2(m.v[1].uv) + double(h.b2) * dvec2(m.v[2].uv);
   }
   dvec2 rpToSample(const dvec2& uv) const { return disp_.toSample(uv); }
-  void rpBoxOverRect(const dvec2& lo, const dvec2& hi, const vec2& h, dvec3& blo, dvec3& bhi) const {
-    shared::boxOverRect(tex_.Pc, tex_.PX, tex_.PY, tex_.Nc, tex_.NX, tex_.NY, invM_, lo, hi,
-                        double(h.x), double(h.y), this->g_texPad, blo, bhi);
+  void rpBoxOverRect(const vec2& lo, const vec2& hi, const vec2& h, vec3& blo, vec3& bhi) const {
+    shared::boxOverRectF(tex_.box, lo, hi, h.x, h.y, this->g_texPadF, blo, bhi);
   }
   void rpInflatedBox(dvec3& lo, dvec3& hi) const {
     lo = inflatedBox_.lo;
@@ -265,7 +262,6 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
   const TextureFrame& tex_;  // the boxes' frame
   const float blend_;        // the ray's level-of-detail blend (Displacement::blendOf)
   const WatertightRay watertightRay_;
-  const double invM_;  // >= 1/min |N| over T: the boxes' scale of h (shared::boxOverRect)
   const Prism* prism_ = nullptr;  // inflated prism: precomputed, or ownPrism_ for far origins
   Prism ownPrism_;
   BoxD inflatedBox_;

@@ -200,16 +200,16 @@ struct Roots {
 // closest hit and the micro-cells (built at the first leaf).
 struct TfdmRay : shared::TfdmLoop<TfdmRay> {
   TfdmRay(const CellPyramid& pyr, const Displacement& d, const TextureFrame& X, const DisplacedTriangle& T,
-          const Ray& r, double invM, double boxPad, double tAbs)
-      : pyr(pyr), d(d), X(X), T(T), r(r), wr(r), invM(invM), boxPad(boxPad), tAbs(tAbs) {}
+          const Ray& r, double boxPad, double tAbs)
+      : pyr(pyr), d(d), X(X), T(T), r(r), wr(r), boxPadF(shared::floatAbove(boxPad, boxPad)), tAbs(tAbs) {}
 
   double slack(double t) const { return OBLONG_TRAV_SLACK_REL * std::abs(t) + tAbs; }
   vec2 tfdmHeights(int L, int x, int y) const {
     const Interval h = d.toHeight(pyr.node(L, x, y));
     return vec2(h.lo, h.hi);
   }
-  void tfdmBox(const dvec2& lo, const dvec2& hi, const vec2& h, dvec3& blo, dvec3& bhi) const {
-    shared::boxOverRect(X.Pc, X.PX, X.PY, X.Nc, X.NX, X.NY, invM, lo, hi, h.x, h.y, boxPad, blo, bhi);
+  void tfdmBox(const vec2& lo, const vec2& hi, const vec2& h, vec3& blo, vec3& bhi) const {
+    shared::boxOverRectF(X.box, lo, hi, h.x, h.y, boxPadF, blo, bhi);
   }
   double tfdmLimit() const {
     return best.found ? double(best.t) + slack(best.t) : double(r.tmax) + slack(r.tmax);
@@ -228,7 +228,8 @@ struct TfdmRay : shared::TfdmLoop<TfdmRay> {
   const DisplacedTriangle& T;
   const Ray& r;
   const WatertightRay wr;
-  double invM, boxPad, tAbs;
+  float boxPadF;  // the boxes' pad, rounded up
+  double tAbs;
   ClosestHit best;
   std::optional<MicroCells> cells;
 };
@@ -295,19 +296,18 @@ class Tfdm final : public TfdmIntersector {
     const double maxO = std::max({std::abs(O.x), std::abs(O.y), std::abs(O.z)});
     const RayMargins m = RayMargins::make(P, maxAbsVertex(T), maxO);
     // The ray in the boxes' frame; its rotation's rounding (and the frame's) is padded.
-    const dvec3 Ob = X.rot(O), Db = X.rot(D), invDb = 1.0 / Db;
+    const shared::BoxRayF R = shared::boxRayF(X.rot(O), X.rot(D), X.Pc);
     const double boxPad = worldBoxes_ ? m.boxPad : shared::texPiecePad(m.boxPad, maxO, maxAbsVertex(T), P.a, P.b);
     const double tSlackAbs = shared::tSlackAbs(boxPad, shared::lengthD(D));
     const dvec2 uvLo = d.toSample(T.uvBox.lo) - dvec2(F.origin), uvHi = d.toSample(T.uvBox.hi) - dvec2(F.origin);
-    const double invM = invNormalLengthBound(T.minNormalLength);
     // T's uv triangle in sample coordinates, with the inside sign of each edge.
     dvec2 S[3];
     for (int k = 0; k < 3; ++k) S[k] = d.toSample(T.t[k]);
     // Child order: from the signs of the ray's texture-space direction.
     const dvec2 dl = approxDirLocal(F, D);
-    TfdmRay tr(*pyr_, d, X, T, r, invM, boxPad, tSlackAbs);
+    TfdmRay tr(*pyr_, d, X, T, r, boxPad, tSlackAbs);
     shared::TfdmWork w;
-    tr.tfdmTraverse(ivec2(cr.x0, cr.y0), ivec2(cr.x1, cr.y1), F.origin, S[0], S[1], S[2], uvLo, uvHi, dl, Ob, invDb,
+    tr.tfdmTraverse(ivec2(cr.x0, cr.y0), ivec2(cr.x1, cr.y1), F.origin, S[0], S[1], S[2], uvLo, uvHi, dl, R,
                     r.tmin - tr.slack(r.tmin), w);
     if (w.overflow) fail("tfdm", "traversal stack overflow");  // cannot happen: depth <= 94
     RayCounters local;
@@ -381,7 +381,7 @@ std::unique_ptr<Intersector> makeTfdm(ParamSet& params, const BaselineContext& c
   // The boxes' frame: the mesh's texture frames, or the world's axes.
   std::vector<TextureFrame> frames(world ? mesh.tris.size() : 0);
   for (size_t i = 0; i < frames.size(); ++i)
-    if (mesh.params[i].valid) frames[i] = TextureFrame::make(mesh.frames[i], mesh.tris[i], true);
+    if (mesh.params[i].valid) frames[i] = TextureFrame::make(mesh.frames[i], mesh.tris[i], mesh.cells[i], true);
   return std::make_unique<Tfdm>(std::move(mesh), std::move(roots), std::move(frames), std::move(pyr), top, world);
 }
 

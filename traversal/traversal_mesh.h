@@ -292,7 +292,7 @@ void TraversalMesh::buildTriangle(size_t i, Heights&& heights) {
   inflatedBoxes[i] = prisms[i].bounds();
   inflatedBoxes[i].pad(m.boxPad);
   obbs[i] = PrismOBB::around(prisms[i], T, m.boxPad);
-  texFrames[i] = TextureFrame::make(frames[i], T);
+  texFrames[i] = TextureFrame::make(frames[i], T, cells[i]);
   const Prism exact = Prism::exact(T, params[i].a, params[i].b);
   BoxD tb;
   double mag = 0;

@@ -15,6 +15,7 @@
 #include "core/kernels/curve_point.h"  // ClaimBounds
 #include "core/kernels/microcells.h"   // McEdges, McTri
 #include "core/kernels/patch_math.h"   // PatchFrame
+#include "core/kernels/rect_bounds.h"  // BoxFrameF
 #endif
 
 #ifdef __cplusplus
@@ -22,6 +23,7 @@
 
 #include <cstdint>
 namespace oblong::vkgpu {
+using shared::BoxFrameF;
 using shared::ClaimBounds;
 using shared::McEdges;
 using shared::McTri;
@@ -105,15 +107,16 @@ struct TriGpu {
   dvec2 sbLo, sbHi;         // T's uv box in local sample coordinates
   McEdges edges;            // MicroCells' edges (T's vertices in absolute sample coordinates: edges.S)
   dvec2 eps;                // PrismParams: the cell dilation ε
-  double vertexErr, a, b, budget, budgetPad, maxP, invMinNormalLength;  // budgetPad: TraversalMesh::budgetPad
+  double vertexErr, a, b, budget, budgetPad, maxP;  // budgetPad: TraversalMesh::budgetPad
   double inflateB, inflateS;
-  // TraversalMesh::texFrames (the boxes' frame: axes, and P and N in it),
-  // texPrismBoxes (unpadded) and texPrismMag.
+  // TraversalMesh::texFrames (the boxes' frame: axes, and the anchor Pc of its float
+  // box frame, `box` below), texPrismBoxes (unpadded) and texPrismMag.
   dvec3 texAxis[3];
-  dvec3 tPc, tPX, tPY, tNc, tNX, tNY;
+  dvec3 tPc;
   dvec3 texBoxLo, texBoxHi;
   double texMag, pad2;
   McTri mc;                 // MicroCells' triangle (DisplacedTriangle in float, scale and bias)
+  BoxFrameF box;            // TraversalMesh::texFrames' float box frame (anchored at tPc)
   float uvArea2, pad0;
   ivec2 origin;             // LocalFrame::origin
   ivec2 cellLo, cellHi;     // T's cells, local (cellsOverlapping − origin)

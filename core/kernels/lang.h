@@ -78,6 +78,7 @@ inline float sqrt(float x) { return std::sqrt(x); }
 using std::acos;
 using std::cos;
 inline bool finiteF(float x) { return std::isfinite(x); }
+inline bool isinfF(float x) { return std::isinf(x); }
 inline int findMSB(int v) { return int(std::bit_width(unsigned(v))) - 1; }  // GLSL's, for v > 0
 inline float copysignF(float m, float s) { return std::copysign(m, s); }
 inline float cbrtF(float x) { return std::cbrt(x); }
@@ -144,6 +145,7 @@ dvec3 crossD(dvec3 x, dvec3 y) {
 }
 double lengthD(dvec3 v) { return sqrt(dotD(v, v)); }
 bool finiteF(float x) { return !isinf(x) && !isnan(x); }
+bool isinfF(float x) { return isinf(x); }
 float copysignF(float m, float s) { return (floatBitsToUint(s) & 0x80000000u) != 0u ? -abs(m) : abs(m); }
 // std::cbrt's value from pow: not bit-identical to the C library's (docs/vulkan.md).
 float cbrtF(float x) { return x == 0.0f ? 0.0f : copysignF(pow(abs(x), 1.0f / 3.0f), x); }

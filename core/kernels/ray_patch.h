@@ -36,8 +36,9 @@
 //         1: m splits the piece; 2: invert at t for it; 0: no split
 //   bool  rpHitFound(); float rpHitT(); dvec2 rpHitUV()  the closest hit and its uv
 //   dvec2 rpToSample(dvec2 uv)                 Displacement::toSample
-//   void  rpBoxOverRect(dvec2 lo, dvec2 hi, vec2 h, out dvec3 blo, out dvec3 bhi)  the box
-//         over local rectangle [lo, hi] at heights h in T's texture frame (rect_bounds.h)
+//   void  rpBoxOverRect(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi)  the box over
+//         local rectangle [lo, hi] at heights h in T's float box frame, padded by
+//         g_texPadF (rect_bounds.h's boxOverRectF)
 //   void  rpInflatedBox(out dvec3 lo, out dvec3 hi)   the inflated prism's box, padded
 //   int   rpPrismCrossings(out Crossing first, out Crossing last)  prism.h's crossings
 //   void  rpStat(int what)                     a statistics event (OBLONG_RP_STAT_*)
@@ -48,6 +49,7 @@
 #include "core/kernels/curve_point.h"
 #include "core/kernels/lang.h"
 #include "core/kernels/patch_math.h"
+#include "core/kernels/rect_bounds.h"
 #include "core/kernels/prism.h"
 
 // The statistics events the body reports (C++: core/stats.h counters; GLSL: none).

@@ -27,14 +27,15 @@ ivec2 g_origin;            // the absolute sample index of local (0, 0)
 float g_tmin, g_tmax;  // the ray's [tmin, tmax] (float, as Ray)
 dvec3 g_O, g_D, g_invD;
 dvec3 g_boxLo, g_boxHi;  // the exact prism's world box, padded (box-only subdivision)
-dvec3 g_Ot, g_invDt;     // the ray in the texture frame
-dvec3 g_texLo, g_texHi;  // the exact prism's box in the texture frame, padded
+BoxRayF g_bray;           // the ray in T's float box frame (rect_bounds.h)
+vec3 g_texLo, g_texHi;    // the exact prism's box in that frame, padded, rounded outward
 float g_marchingScale;
 int g_stackDepth;              // entries used of the stack
 bool g_inversionInTraversal;   // Fig. 5a
 // Set by rpInit.
 double g_boxPad, g_tAbs;  // the ray's pad of the per-step boxes; slack for float t
 double g_texPad;          // g_boxPad in the texture frame
+float g_texPadF;          // g_texPad rounded up: the float boxes' pad
 dvec2 g_eps;              // ε: cells within it of the curve are marched
 bool g_wideEps;           // ε wide against the marching scale: leaves are boxes
 double g_leafScale;       // pieces up to this many texels are leaves
@@ -55,6 +56,7 @@ void rpInit(OBLONG_IN(RayMargin) m, double maxP, double maxO, double a, double b
   g_boxPad = m.boxPad;
   g_tAbs = tSlackAbs(g_boxPad, lenD);
   g_texPad = texPiecePad(g_boxPad, maxO, maxP, a, b);
+  g_texPadF = floatAbove(g_texPad, g_texPad);
   OBLONG_PRECISE dvec2 e = eps + kxy * (double(OBLONG_TRAV_RAY_ERR_FACTOR) * m.rayErr);
   g_eps = e;
   double maxDil = max(g_eps.x, g_eps.y);
@@ -162,16 +164,16 @@ bool pointFromHit(double t, OBLONG_OUT(CurvePoint) outp) {
 
 // ---- boxes ---------------------------------------------------------------------------------
 // The ray interval [t0, t1] (clipped in place) through the box of the micro-geometry over
-// local cells [clo, chi] with heights h, in T's texture frame. False when empty.
+// local cells [clo, chi] with heights h, in T's float box frame. False when empty.
 bool clipToBox(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi, OBLONG_IN(vec2) h, OBLONG_INOUT(double) t0,
                OBLONG_INOUT(double) t1) {
-  dvec2 lo = max(dvec2(clo), g_sbLo), hi = min(dvec2(chi + 1), g_sbHi);
-  dvec3 blo, bhi;
+  vec2 lo = vec2(max(dvec2(clo), g_sbLo)), hi = vec2(min(dvec2(chi + 1), g_sbHi));
+  vec3 blo, bhi;
   OBLONG_HOOK(rpBoxOverRect)(lo, hi, h, blo, bhi);
   blo = max(blo, g_texLo);
   bhi = min(bhi, g_texHi);
   if (blo.x > bhi.x || blo.y > bhi.y || blo.z > bhi.z) return false;
-  clipBox(blo, bhi, g_Ot, g_invDt, t0, t1);
+  clipBoxF(blo, bhi, g_bray, t0, t1);
   return t0 <= t1;
 }
 // The same with the range query's heights over the cells.

@@ -20,9 +20,11 @@
 // only by about h·(1/m - 1/min over the rectangle of |N|) along N: nothing where T's
 // normals are parallel (m = 1), little on a finely tessellated curved mesh (m near 1).
 //
-// Precision: computed in double and padded explicitly by `pad` (the float error of the
-// micro-vertices plus the ray test's own rounding) and by its own rounding; the box is
-// never converted to float (the ray/box test runs in double).
+// Precision: boxOverRect computes in double and pads explicitly by `pad` (the float error
+// of the micro-vertices plus the ray test's own rounding) and by its own rounding. The
+// traversals' per-step boxes use the float form below (boxOverRectF, clipBoxF): the same
+// interval arithmetic in float, relative to an anchor near T, with a rigorous pad for
+// float rounding whose scales are T's, computed once per triangle (boxFrameF).
 #ifndef OBLONG_KERNELS_RECT_BOUNDS_H
 #define OBLONG_KERNELS_RECT_BOUNDS_H
 
@@ -76,6 +78,149 @@ OBLONG_INLINE void clipBox(OBLONG_IN(dvec3) lo, OBLONG_IN(dvec3) hi, OBLONG_IN(d
     }
     t0 = max(t0, a);
     t1 = min(t1, b);
+  }
+}
+
+// ---- the boxes in float ----------------------------------------------------------------
+// The float error analysis, u = 2^-24 (float's unit roundoff), for a box over a rectangle
+// of local coordinates with |X| <= xm, |Y| <= ym (T's cells) and heights with |h/|N|| <= K:
+// each product and sum of boxOverRectF rounds once and its inputs once (the frame's
+// coefficients and the rectangle's corners), so a side of the box is off by at most about
+// 6u·magP + 8u·K·magN, where magP >= |PX_k|·xm + |PY_k|·ym and magN >= |Nc_k| + |NX_k|·xm
+// + |NY_k|·ym over the axes k; the box is padded by 32u (2^-19) of that, and `pad` itself
+// is rounded up. The ray's float origin O (relative to the anchor) is off by at most
+// u·|O| plus the double subtraction's error; oErr is four times that, and a slab's t is
+// off by at most that error times |invD| plus 4u·|t| (the division's, the difference's and
+// the product's rounding): clipBoxF widens each t by oErr·|invD| + 2^-21·|t|.
+#define OBLONG_U2M19 1.9073486328125e-6   // 2^-19
+#define OBLONG_U2M21 4.76837158203125e-7  // 2^-21
+#define OBLONG_U2M22 2.384185791015625e-7 // 2^-22
+#define OBLONG_U2M50 8.8817841970012523e-16 // 2^-50
+
+// T's float box frame: its P and N in the texture frame, relative to the anchor (P at
+// local (0, 0), the frame's Pc), rounded to float; invM >= 1/min|N| (rect_bounds' k); magP
+// and magN the error scales above, rounded up.
+struct BoxFrameF {
+  vec3 PX, PY, Nc, NX, NY;
+  float invM, magP, magN;
+};
+
+// One ray in a triangle's float box frame: its origin relative to the anchor (rounded),
+// 1/D per axis (infinite where D's component is 0), and oErr >= 4× the origin's error.
+struct BoxRayF {
+  vec3 O, invD, oErr;
+};
+
+// The float nearest to x on the side away from +∞ (floatBelow) or -∞ (floatAbove), for a
+// double x computed with an error at most 2^-52·mag: x moved by 4u·|x| (more than the
+// rounding to float) and by the double error, before the rounding.
+OBLONG_INLINE float floatBelow(double x, double mag) {
+  OBLONG_PRECISE double y = x - (OBLONG_U2M22 * abs(x) + OBLONG_U2M50 * mag + 1e-30);
+  return float(y);
+}
+OBLONG_INLINE float floatAbove(double x, double mag) {
+  OBLONG_PRECISE double y = x + (OBLONG_U2M22 * abs(x) + OBLONG_U2M50 * mag + 1e-30);
+  return float(y);
+}
+
+// T's BoxFrameF from its texture frame (PX ... NY, in double), invM (a float already
+// rounded up) and the largest |X|, |Y| of its cells' rectangle (local sample coordinates).
+OBLONG_INLINE BoxFrameF boxFrameF(OBLONG_IN(dvec3) PX, OBLONG_IN(dvec3) PY, OBLONG_IN(dvec3) Nc, OBLONG_IN(dvec3) NX,
+                                  OBLONG_IN(dvec3) NY, float invM, OBLONG_IN(dvec2) xym) {
+  BoxFrameF B;
+  B.PX = vec3(PX);
+  B.PY = vec3(PY);
+  B.Nc = vec3(Nc);
+  B.NX = vec3(NX);
+  B.NY = vec3(NY);
+  B.invM = invM;
+  double mp = 0.0, mn = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    OBLONG_PRECISE double p = abs(PX[k]) * xym.x + abs(PY[k]) * xym.y;
+    OBLONG_PRECISE double n = abs(Nc[k]) + abs(NX[k]) * xym.x + abs(NY[k]) * xym.y;
+    mp = max(mp, p);
+    mn = max(mn, n);
+  }
+  B.magP = floatAbove(mp, mp);
+  B.magN = floatAbove(mn, mn);
+  return B;
+}
+
+// x − anchor rounded to the float below (relBelowF) or above (relAboveF), per axis.
+OBLONG_INLINE vec3 relBelowF(OBLONG_IN(dvec3) x, OBLONG_IN(dvec3) anchor) {
+  OBLONG_PRECISE dvec3 d = x - anchor;
+  vec3 r;
+  for (int k = 0; k < 3; ++k) r[k] = floatBelow(d[k], abs(x[k]) + abs(anchor[k]));
+  return r;
+}
+OBLONG_INLINE vec3 relAboveF(OBLONG_IN(dvec3) x, OBLONG_IN(dvec3) anchor) {
+  OBLONG_PRECISE dvec3 d = x - anchor;
+  vec3 r;
+  for (int k = 0; k < 3; ++k) r[k] = floatAbove(d[k], abs(x[k]) + abs(anchor[k]));
+  return r;
+}
+
+// The ray (Ot, Dt: origin and direction in the texture frame, double) in the float box
+// frame anchored at `anchor`.
+OBLONG_INLINE BoxRayF boxRayF(OBLONG_IN(dvec3) Ot, OBLONG_IN(dvec3) Dt, OBLONG_IN(dvec3) anchor) {
+  BoxRayF R;
+  OBLONG_PRECISE dvec3 o = Ot - anchor;
+  R.O = vec3(o);
+  R.invD = vec3(1.0 / Dt);
+  for (int k = 0; k < 3; ++k) R.oErr[k] = floatAbove(4.0 * OBLONG_U2M22 * abs(o[k]), abs(Ot[k]) + abs(anchor[k]));
+  return R;
+}
+
+// boxOverRect in float over local rectangle [lo, hi] (the same rectangle as above) with
+// heights [hlo, hhi], relative to the anchor; pad (rounded up by the caller) as above.
+OBLONG_INLINE void boxOverRectF(OBLONG_IN(BoxFrameF) B, OBLONG_IN(vec2) lo, OBLONG_IN(vec2) hi, float hlo, float hhi,
+                                float pad, OBLONG_OUT(vec3) blo, OBLONG_OUT(vec3) bhi) {
+  OBLONG_PRECISE vec3 Nlo, Nhi;
+  for (int k = 0; k < 3; ++k) {
+    OBLONG_PRECISE float px0 = B.PX[k] * lo.x, px1 = B.PX[k] * hi.x, py0 = B.PY[k] * lo.y, py1 = B.PY[k] * hi.y;
+    blo[k] = min(px0, px1) + min(py0, py1);
+    bhi[k] = max(px0, px1) + max(py0, py1);
+    OBLONG_PRECISE float nx0 = B.NX[k] * lo.x, nx1 = B.NX[k] * hi.x, ny0 = B.NY[k] * lo.y, ny1 = B.NY[k] * hi.y;
+    Nlo[k] = B.Nc[k] + min(nx0, nx1) + min(ny0, ny1);
+    Nhi[k] = B.Nc[k] + max(nx0, nx1) + max(ny0, ny1);
+  }
+  // k = h/|N|, |N| in [m, 1]: 1 - 2^-20 covers unit normals' float rounding (|N| <= 1 + 3u).
+  OBLONG_PRECISE float klo = hlo < 0.0f ? hlo * B.invM : hlo * 0.99999904632568359375f;
+  OBLONG_PRECISE float khi = hhi > 0.0f ? hhi * B.invM : hhi * 0.99999904632568359375f;
+  for (int k = 0; k < 3; ++k) {
+    OBLONG_PRECISE float a = klo * Nlo[k], b = klo * Nhi[k], c = khi * Nlo[k], d = khi * Nhi[k];
+    blo[k] += min(min(a, b), min(c, d));
+    bhi[k] += max(max(a, b), max(c, d));
+  }
+  OBLONG_PRECISE float K = max(abs(klo), abs(khi));
+  OBLONG_PRECISE float p = pad + float(OBLONG_U2M19) * (B.magP + K * B.magN);
+  blo -= vec3(p);
+  bhi += vec3(p);
+}
+
+// The slab test of clipBox for a float box and ray, on the traversal's double [t0, t1]:
+// each slab's t widened by its float error (above). A t beyond ±1e30 is clamped there
+// first (a bound still, and no ∞ − ∞ in the widening).
+OBLONG_INLINE void clipBoxF(OBLONG_IN(vec3) lo, OBLONG_IN(vec3) hi, OBLONG_IN(BoxRayF) R, OBLONG_INOUT(double) t0,
+                            OBLONG_INOUT(double) t1) {
+  for (int k = 0; k < 3; ++k) {
+    if (isinfF(R.invD[k])) {  // parallel to the slab
+      if (R.O[k] + R.oErr[k] < lo[k] || R.O[k] - R.oErr[k] > hi[k]) t0 = kInfD;
+      continue;
+    }
+    OBLONG_PRECISE float a = (lo[k] - R.O[k]) * R.invD[k], b = (hi[k] - R.O[k]) * R.invD[k];
+    if (a > b) {
+      float s = a;
+      a = b;
+      b = s;
+    }
+    a = clamp(a, -1e30f, 1e30f);
+    b = clamp(b, -1e30f, 1e30f);
+    OBLONG_PRECISE float e = R.oErr[k] * abs(R.invD[k]);
+    OBLONG_PRECISE float a2 = a - (e + float(OBLONG_U2M21) * abs(a));
+    OBLONG_PRECISE float b2 = b + (e + float(OBLONG_U2M21) * abs(b));
+    t0 = max(t0, double(a2));
+    t1 = min(t1, double(b2));
   }
 }
 

@@ -7,8 +7,9 @@
 // through hooks, called as OBLONG_HOOK(name)(...) (C++: the derived class's member; GLSL:
 // a function of that name declared before the body):
 //   vec2   tfdmHeights(int L, int x, int y)   node (x, y) of level L's heights (toHeight)
-//   void   tfdmBox(dvec2 lo, dvec2 hi, vec2 h, out dvec3 blo, out dvec3 bhi)  the box over
-//          local rectangle [lo, hi] at heights h, in the frame of Ot and invDt
+//   void   tfdmBox(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi)  the box over
+//          local rectangle [lo, hi] at heights h, in the float box frame of R
+//          (core/kernels/rect_bounds.h's boxOverRectF)
 //   double tfdmLimit()                       the far end of a box test: the closest hit so
 //                                            far (or tmax), with its slack
 //   int    tfdmLeaf(int x, int y)            tests cell (x, y)'s micro-triangles; how many
@@ -16,10 +17,10 @@
 // cLo, cHi: T's cells (absolute, inclusive); origin: the absolute sample index of local
 // (0, 0); S0..S2: T's uv triangle in sample coordinates; sbLo, sbHi: T's uv box in local
 // sample coordinates; dl: the ray's approximate texture-space direction (child order);
-// Ot, invDt: the ray in the boxes' frame; t0: the near end of a box test.
+// R: the ray in the boxes' float frame; t0: the near end of a box test.
 void tfdmTraverse(OBLONG_IN(ivec2) cLo, OBLONG_IN(ivec2) cHi, OBLONG_IN(ivec2) origin, OBLONG_IN(dvec2) S0,
                   OBLONG_IN(dvec2) S1, OBLONG_IN(dvec2) S2, OBLONG_IN(dvec2) sbLo, OBLONG_IN(dvec2) sbHi,
-                  OBLONG_IN(dvec2) dl, OBLONG_IN(dvec3) Ot, OBLONG_IN(dvec3) invDt, double t0,
+                  OBLONG_IN(dvec2) dl, OBLONG_IN(BoxRayF) R, double t0,
                   OBLONG_OUT(TfdmWork) w) {
   w.boxes = 0;
   w.leaves = 0;
@@ -54,12 +55,12 @@ void tfdmTraverse(OBLONG_IN(ivec2) cLo, OBLONG_IN(ivec2) cHi, OBLONG_IN(ivec2) o
     }
     ++w.boxes;
     vec2 h = OBLONG_HOOK(tfdmHeights)(n.z, n.x, n.y);
-    dvec2 lo = max(dvec2(double(clo.x - origin.x), double(clo.y - origin.y)), sbLo);
-    dvec2 hi = min(dvec2(double(chi.x + 1 - origin.x), double(chi.y + 1 - origin.y)), sbHi);
-    dvec3 blo, bhi;
+    vec2 lo = vec2(max(dvec2(double(clo.x - origin.x), double(clo.y - origin.y)), sbLo));
+    vec2 hi = vec2(min(dvec2(double(chi.x + 1 - origin.x), double(chi.y + 1 - origin.y)), sbHi));
+    vec3 blo, bhi;
     OBLONG_HOOK(tfdmBox)(lo, hi, h, blo, bhi);
     double b0 = t0, b1 = OBLONG_HOOK(tfdmLimit)();
-    clipBox(blo, bhi, Ot, invDt, b0, b1);
+    clipBoxF(blo, bhi, R, b0, b1);
     if (!(b0 <= b1)) continue;
     if (n.z == 0) {
       ++w.leaves;

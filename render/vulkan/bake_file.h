@@ -23,7 +23,7 @@
 
 namespace oblong::vk {
 
-inline constexpr uint32_t kBakeVersion = 10;  // 10: arrays stored as byte planes; 9: tfdm (MeshGpu::method, tfStored); 8: the micro-cells' edges computed by the shaders (core/kernels/microcells.h); 7: MeshGpu::stackDepth; 6: boxes in the texture frame (TriGpu::texAxis, ...)
+inline constexpr uint32_t kBakeVersion = 11;  // 11: the boxes' float frame (TriGpu::box); 10: arrays stored as byte planes; 9: tfdm (MeshGpu::method, tfStored); 8: the micro-cells' edges computed by the shaders (core/kernels/microcells.h); 7: MeshGpu::stackDepth; 6: boxes in the texture frame (TriGpu::texAxis, ...)
 
 struct BakedScene {
   GpuRecords records;

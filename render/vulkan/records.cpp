@@ -25,7 +25,7 @@ namespace oblong::vk {
 using namespace vkgpu;
 
 static_assert(sizeof(RayGpu) == 40 && sizeof(HitGpu) == 32 && sizeof(CountersGpu) == 32);
-static_assert(sizeof(TriGpu) == 1600 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
+static_assert(sizeof(TriGpu) == 1544 && sizeof(TriGpu) % 8 == 0 && alignof(TriGpu) == 8);
 static_assert(sizeof(MeshGpu) == 176 && sizeof(PushGpu) == 16);
 
 namespace {
@@ -61,11 +61,12 @@ TriGpu makeTri(const TraversalMesh& tm, size_t i) {
   g.mc = cells.kernelTri();
   g.eps = P.eps;
   g.vertexErr = P.vertexErr, g.a = P.a, g.b = P.b, g.budget = tm.originBudget[i];
-  g.maxP = maxAbsVertex(T), g.invMinNormalLength = invNormalLengthBound(T.minNormalLength);
+  g.maxP = maxAbsVertex(T);
   g.inflateB = P.inflateB, g.inflateS = P.inflateS;
   const TextureFrame& X = tm.texFrames[i];
   for (int k = 0; k < 3; ++k) g.texAxis[k] = X.axis[k];
-  g.tPc = X.Pc, g.tPX = X.PX, g.tPY = X.PY, g.tNc = X.Nc, g.tNX = X.NX, g.tNY = X.NY;
+  g.tPc = X.Pc;
+  g.box = X.box;
   g.texBoxLo = tm.texPrismBoxes[i].lo, g.texBoxHi = tm.texPrismBoxes[i].hi;
   g.texMag = tm.texPrismMag[i];
   g.uvArea2 = T.uvArea2;

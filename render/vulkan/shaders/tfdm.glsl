@@ -2,7 +2,7 @@
 // node kernels are the CPU's own (core/kernels/tfdm_body.h, tfdm.h), as are the boxes
 // (rect_bounds.h) and the micro-cells; here are its hooks: the pyramid's words in the mesh
 // record, the boxes' pad and the counters. Needs traversal.glsl's per-ray state
-// (initPatch: g_O, g_Ot, g_invDt, g_boxPad, the closest hit and the counters).
+// (initPatch: g_O, g_bray, g_texPadF, the closest hit and the counters).
 
 // The pyramid (records.cpp): level L's row in the layer table, rmipLayers[m.rmipLayers +
 // L] = (first node, width, height, 0), its nodes at m.rmipData (bits 16: one word of
@@ -24,7 +24,7 @@ vec2 tfdmDecode(MeshGpu m, uint w) {  // Quantizer16::decodePair
 vec2 tfdmHeights(int L, int x, int y) {
   return rpToHeight(tfdmNode(g_mesh, g_mesh.rmipBits, g_mesh.tfStored - 1, L, x, y));
 }
-void tfdmBox(dvec2 lo, dvec2 hi, vec2 h, out dvec3 blo, out dvec3 bhi) { rpBoxOverRect(lo, hi, h, blo, bhi); }
+void tfdmBox(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi) { rpBoxOverRect(lo, hi, h, blo, bhi); }
 double tfdmLimit() { return bestLimit(); }
 int tfdmLeaf(int x, int y) { return microCell(x, y); }
 #include "core/kernels/tfdm_body.h"
@@ -36,7 +36,7 @@ bool runTfdm() {
   g_tAbs = tSlackAbs(g_texPad, lengthD(g_D));
   TfdmWork w;
   tfdmTraverse(TRI.cellLo + TRI.origin, TRI.cellHi + TRI.origin, TRI.origin, TRI.edges.S[0], TRI.edges.S[1], TRI.edges.S[2], TRI.sbLo,
-               TRI.sbHi, dirLocal(), g_Ot, g_invDt, double(g_tmin) - slack(double(g_tmin)), w);
+               TRI.sbHi, dirLocal(), g_bray, double(g_tmin) - slack(double(g_tmin)), w);
   g_boxes = w.boxes;
   g_rangeQueries = w.boxes;
   g_cells = w.leaves;

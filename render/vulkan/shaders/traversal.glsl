@@ -95,7 +95,7 @@ dvec2 rpHitUV() {
 }
 dvec2 rpToSample(dvec2 uv) { return toSample(uv); }
 // After the driver (they read its state):
-void rpBoxOverRect(dvec2 lo, dvec2 hi, vec2 h, out dvec3 blo, out dvec3 bhi);
+void rpBoxOverRect(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi);
 void rpInflatedBox(out dvec3 lo, out dvec3 hi);
 int rpPrismCrossings(out Crossing first, out Crossing last);
 void rpStat(int what) {}
@@ -118,9 +118,8 @@ void rpStat(int what) {}
 
 double maxNormO() { return max(max(abs(g_O.x), abs(g_O.y)), abs(g_O.z)); }
 
-void rpBoxOverRect(dvec2 lo, dvec2 hi, vec2 h, out dvec3 blo, out dvec3 bhi) {
-  boxOverRect(TRI.tPc, TRI.tPX, TRI.tPY, TRI.tNc, TRI.tNX, TRI.tNY, TRI.invMinNormalLength, lo, hi, double(h.x),
-              double(h.y), g_texPad, blo, bhi);
+void rpBoxOverRect(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi) {
+  boxOverRectF(TRI.box, lo, hi, h.x, h.y, g_texPadF, blo, bhi);
 }
 // The inflated prism (RayMargins::prism): with the budget's margins within it (what
 // TraversalMesh precomputes on the CPU), else with the ray's own.
@@ -196,11 +195,13 @@ void initPatch(vec3 o, vec3 d, float tmin, float tmax) {
     g_boxHi = TRI.boxHi + dvec3(g_boxPad);
   }
   // The ray and the exact prism's box in the texture frame (TraversalMesh::texPrismBox).
-  g_Ot = dvec3(dotD(TRI.texAxis[0], g_O), dotD(TRI.texAxis[1], g_O), dotD(TRI.texAxis[2], g_O));
-  g_invDt = 1.0 / dvec3(dotD(TRI.texAxis[0], g_D), dotD(TRI.texAxis[1], g_D), dotD(TRI.texAxis[2], g_D));
+  dvec3 Ot = dvec3(dotD(TRI.texAxis[0], g_O), dotD(TRI.texAxis[1], g_O), dotD(TRI.texAxis[2], g_O));
+  dvec3 Dt = dvec3(dotD(TRI.texAxis[0], g_D), dotD(TRI.texAxis[1], g_D), dotD(TRI.texAxis[2], g_D));
+  g_bray = boxRayF(Ot, Dt, TRI.tPc);
   double tPad = texBoxPad(pre ? TRI.budgetPad : g_boxPad, pre ? TRI.budget : maxO, TRI.texMag);
-  g_texLo = TRI.texBoxLo - dvec3(tPad);
-  g_texHi = TRI.texBoxHi + dvec3(tPad);
+  precise dvec3 tlo = TRI.texBoxLo - dvec3(tPad), thi = TRI.texBoxHi + dvec3(tPad);
+  g_texLo = relBelowF(tlo, TRI.tPc);
+  g_texHi = relAboveF(thi, TRI.tPc);
   g_wr = makeWatertightRay(o, d);
   g_found = false;
   g_hitT = kInfF;
