@@ -10,6 +10,7 @@
 #include "traversal/prism.h"
 #include "traversal/psi.h"
 #include "traversal/rect_bounds.h"
+#include "traversal/texture_frame.h"
 #include "traversal/traversal.h"
 #include "strategies/quadtree.h"
 #include "strategies/splitter.h"
@@ -219,6 +220,129 @@ TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "
   }
 }
 
+
+TEST_CASE("the float box holds its cells' micro-vertices, and its slab test the rays through them",
+          "[traversal][prism][unit]") {
+  // boxOverRectF and clipBoxF (core/kernels/rect_bounds.h) as both traversals call them:
+  // in T's texture frame relative to its anchor, with only the pad of the micro-vertices'
+  // own float error (vertexErr) besides their own rounding; also far from the world's
+  // origin, where the anchor and the rounded ray origin carry the float error.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  int vertices = 0, rays = 0, parallel = 0;
+  for (const Scenario& base : {coarseTorus(), sphere()})
+    for (const vec3 shift : {vec3(0.0f), vec3(3000.0f, -2000.0f, 1000.0f)}) {
+      const Scenario& s = base;
+      const float delta = maxCellDelta(*s.disp.map);
+      for (size_t k = 0; k < s.tris.size(); k += 7) {
+        DisplacedTriangle T = s.tris[k];
+        for (auto& p : T.p) p += shift;
+        REQUIRE(T.prepare());
+        const LocalFrame F = LocalFrame::make(T, s.disp);
+        const CellRange cr = cellsOverlapping(T, s.disp);
+        const TextureFrame X = TextureFrame::make(F, T, cr);
+        const auto micro = microTriangles(T, s.disp);
+        Interval hT;
+        for (const auto& m : micro)
+          for (const auto& v : m.v) hT.extend(s.disp.micro(v.uv));
+        const PrismParams P = analyzeShell(T, s.disp, hT, delta);
+        const float pad = shared::floatAbove(P.vertexErr, P.vertexErr);
+        for (int q = 0; q < 12; ++q) {
+          std::uniform_int_distribution<int> XI(cr.x0, cr.x1), YI(cr.y0, cr.y1);
+          int x0 = XI(rng), x1 = XI(rng), y0 = YI(rng), y1 = YI(rng);
+          if (x0 > x1) std::swap(x0, x1);
+          if (y0 > y1) std::swap(y0, y1);
+          Interval h;
+          for (int j = y0; j <= y1 + 1; ++j)
+            for (int i = x0; i <= x1 + 1; ++i) h.extend(s.disp.sampleHeight(i, j));
+          const dvec2 sb0 = s.disp.toSample(T.uvBox.lo) - dvec2(F.origin), sb1 = s.disp.toSample(T.uvBox.hi) - dvec2(F.origin);
+          const vec2 lo = vec2(glm::max(dvec2(x0, y0) - dvec2(F.origin), sb0));
+          const vec2 hi = vec2(glm::min(dvec2(x1 + 1, y1 + 1) - dvec2(F.origin), sb1));
+          vec3 blo, bhi;
+          shared::boxOverRectF(X.box, lo, hi, h.lo, h.hi, pad, blo, bhi);
+          forEachMicroTriangle(T, s.disp, CellRange{x0, y0, x1, y1}, [&](const MicroTriangle& m) {
+            for (const auto& v : m.v) {
+              const dvec3 pt = X.rot(dvec3(v.p)) - X.Pc;  // the vertex in the frame, relative to the anchor
+              INFO(s.name << " shift " << shift.x << " triangle " << k << " cells " << x0 << ".." << x1 << " x " << y0
+                          << ".." << y1);
+              CHECK((pt.x >= blo.x && pt.y >= blo.y && pt.z >= blo.z && pt.x <= bhi.x && pt.y <= bhi.y &&
+                     pt.z <= bhi.z));
+              ++vertices;
+              // A ray reaching the vertex at t = 1 from up to 50 units away (one in four
+              // parallel to a slab): the slab test keeps t = 1.
+              if ((vertices & 7) != 0) return;
+              const dvec3 Pt = X.rot(dvec3(v.p));
+              dvec3 Dt(U(rng), U(rng), U(rng));
+              Dt *= 50.0 * (0.01 + std::abs(U(rng)));
+              if ((vertices & 31) == 0) {
+                Dt[vertices % 3] = 0.0;
+                ++parallel;
+              }
+              const dvec3 Ot = Pt - Dt;
+              double t0 = 0.0, t1 = 2.0;
+              shared::clipBoxF(blo, bhi, shared::boxRayF(Ot, Dt, X.Pc), t0, t1);
+              CHECK(t0 <= 1.0 + 1e-12);
+              CHECK(t1 >= 1.0 - 1e-12);
+              ++rays;
+            }
+          });
+        }
+      }
+    }
+  CHECK(vertices > 10000);
+  CHECK(rays > 1000);
+  CHECK(parallel > 10);
+}
+
+TEST_CASE("the float box and slab test cover their own rounding where the box is tight", "[traversal][prism][unit]") {
+  // No pad from outside (pad 0): on random frames with a flat normal field (|N| = 1,
+  // invM = 1) the box is tight at the rectangle's corners, so every float rounding of
+  // boxOverRectF must be covered by its own pad; the corners' exact points (long double)
+  // must lie in it, and rays through them from up to 1e3 away keep their t in clipBoxF.
+  using LD = long double;
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  int corners = 0;
+  for (int q = 0; q < 20000; ++q) {
+    const double scale = std::pow(10.0, 3.0 * U(rng));  // texel size from 1e-3 to 1e3
+    const dvec3 PX = scale * dvec3(U(rng), U(rng), U(rng)), PY = scale * dvec3(U(rng), U(rng), U(rng));
+    const dvec3 N = glm::normalize(dvec3(U(rng), U(rng), U(rng)));
+    const dvec2 xym(1.0 + 4096.0 * std::abs(U(rng)), 1.0 + 4096.0 * std::abs(U(rng)));
+    const shared::BoxFrameF B = shared::boxFrameF(PX, PY, N, dvec3(0.0), dvec3(0.0), 1.0f, xym);
+    const vec2 lo(float(xym.x * U(rng)), float(xym.y * U(rng)));
+    const vec2 hi = glm::min(lo + vec2(float(1 + 64 * std::abs(U(rng))), float(1 + 64 * std::abs(U(rng)))), vec2(xym));
+    if (!(lo.x <= hi.x && lo.y <= hi.y)) continue;
+    const float h0 = float(scale * U(rng)), h1 = float(scale * U(rng));
+    const float hlo = std::min(h0, h1), hhi = std::max(h0, h1);
+    vec3 blo, bhi;
+    shared::boxOverRectF(B, lo, hi, hlo, hhi, 0.0f, blo, bhi);
+    for (int c = 0; c < 8; ++c) {
+      const LD X = (c & 1) ? hi.x : lo.x, Y = (c & 2) ? hi.y : lo.y, H = (c & 4) ? hhi : hlo;
+      LD p[3];
+      for (int k = 0; k < 3; ++k) p[k] = LD(PX[k]) * X + LD(PY[k]) * Y + H * LD(N[k]);
+      INFO("frame " << q << " corner " << c);
+      for (int k = 0; k < 3; ++k) REQUIRE((p[k] >= LD(blo[k]) && p[k] <= LD(bhi[k])));
+      // A ray reaching the corner at t = 1, from an anchor-relative origin up to 1e3 away
+      // (the anchor itself up to 1e4 from the world's origin).
+      const dvec3 anchor = 1e4 * dvec3(U(rng), U(rng), U(rng));
+      const dvec3 Dt = 1e3 * std::abs(U(rng)) * dvec3(U(rng), U(rng), U(rng));
+      dvec3 Ot;
+      for (int k = 0; k < 3; ++k) Ot[k] = double(LD(anchor[k]) + p[k] - LD(Dt[k]));
+      // The ray as rounded to double meets the corner at t* (per axis, the same up to the
+      // double rounding of Ot, which is far below float's).
+      double t0 = -1e30, t1 = 1e30;
+      shared::clipBoxF(blo, bhi, shared::boxRayF(Ot, Dt, anchor), t0, t1);
+      for (int k = 0; k < 3; ++k) {
+        if (Dt[k] == 0.0) continue;
+        const LD tk = (LD(anchor[k]) + p[k] - LD(Ot[k])) / LD(Dt[k]);
+        INFO("axis " << k << " t " << double(tk) << " in [" << t0 << ", " << t1 << "]");
+        REQUIRE((LD(t0) <= tk && tk <= LD(t1)));
+      }
+      ++corners;
+    }
+  }
+  CHECK(corners > 100000);
+}
 
 TEST_CASE("a triangle's 1/|N| bound holds for every m its float rounds from", "[traversal][prism][unit]") {
   // minInterpolatedNormalLength rounds to nearest: the true minimum lies within half an
