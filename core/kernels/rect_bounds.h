@@ -83,16 +83,18 @@ OBLONG_INLINE void clipBox(OBLONG_IN(dvec3) lo, OBLONG_IN(dvec3) hi, OBLONG_IN(d
 
 // ---- the boxes in float ----------------------------------------------------------------
 // The float error analysis, u = 2^-24 (float's unit roundoff), for a box over a rectangle
-// of local coordinates with |X| <= xm, |Y| <= ym (T's cells) and heights with |h/|N|| <= K:
-// each product and sum of boxOverRectF rounds once and its inputs once (the frame's
-// coefficients and the rectangle's corners), so a side of the box is off by at most about
-// 6u·magP + 8u·K·magN, where magP >= |PX_k|·xm + |PY_k|·ym and magN >= |Nc_k| + |NX_k|·xm
-// + |NY_k|·ym over the axes k; the box is padded by 32u (2^-19) of that, and `pad` itself
-// is rounded up. The ray's float origin O (relative to the anchor) is off by at most
-// u·|O| plus the double subtraction's error; oErr is four times that, and a slab's t is
-// off by at most that error times |invD| plus 4u·|t| (the division's, the difference's and
-// the product's rounding): clipBoxF widens each t by oErr·|invD| + 2^-21·|t|.
-#define OBLONG_U2M19 1.9073486328125e-6   // 2^-19
+// of local coordinates with |X| <= xm, |Y| <= ym (T's cells) and heights with |h/|N|| <= K,
+// magP >= |PX_k|·xm + |PY_k|·ym and magN >= |Nc_k| + |NX_k|·xm + |NY_k|·ym over the axes k,
+// M = magP + K·magN. P's range is off by at most 4u·magP (its coefficients, the corners
+// and the products round: 3u each term; the sum: u), N's by 5u·magN, k by u·|k|, so k·N by
+// 7u·K·magN, and adding it to P's rounds once more: a side is off by at most 9u·M. The
+// box is widened by 16u·M (2^-20; its own rounding and the final subtraction's, u·M each,
+// are covered too), and `pad` comes in rounded up by 4u, more than the two roundings it
+// goes through. The ray's float origin O (relative to the anchor) is off by at most u·|O|
+// plus the double subtraction's error; oErr is four times that, and a slab's t is off by
+// at most that error times |invD| plus 4u·|t| (the division's, the difference's and the
+// product's rounding): clipBoxF widens each t by oErr·|invD| + 2^-21·|t|.
+#define OBLONG_U2M20 9.5367431640625e-7   // 2^-20
 #define OBLONG_U2M21 4.76837158203125e-7  // 2^-21
 #define OBLONG_U2M22 2.384185791015625e-7 // 2^-22
 #define OBLONG_U2M50 8.8817841970012523e-16 // 2^-50
@@ -193,7 +195,7 @@ OBLONG_INLINE void boxOverRectF(OBLONG_IN(BoxFrameF) B, OBLONG_IN(vec2) lo, OBLO
     bhi[k] += max(max(a, b), max(c, d));
   }
   OBLONG_PRECISE float K = max(abs(klo), abs(khi));
-  OBLONG_PRECISE float p = pad + float(OBLONG_U2M19) * (B.magP + K * B.magN);
+  OBLONG_PRECISE float p = pad + float(OBLONG_U2M20) * (B.magP + K * B.magN);
   blo -= vec3(p);
   bhi += vec3(p);
 }
