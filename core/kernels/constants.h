@@ -94,11 +94,11 @@
 #define OBLONG_TRAV_END_PAD_REL 1.0000001
 #define OBLONG_TRAV_END_PAD_ABS 1e-12
 
-// processPiece: a piece is marched when the end points' pads exceed this fraction of the
+// pieceEnd: a piece is marched when the end points' pads exceed this fraction of the
 // rectangle's longer side ("pads dominate": splitting cannot shrink it any further).
 #define OBLONG_TRAV_PAD_DOMINANCE 0.25
 
-// processPiece, inversion during traversal: a clipped end is inverted only when the box
+// pieceEnd, inversion during traversal: a clipped end is inverted only when the box
 // clip moved it by more than this fraction of the piece's ray interval (minGain), and by
 // more than the ray interval in which the piece crosses this many cells along its
 // rectangle's longer side: a smaller move seldom takes a cell off the rectangle (chosen
@@ -110,7 +110,7 @@
 // their pad (texels, both axes together) is at most this; else the point is inverted.
 #define OBLONG_TRAV_CLAIM_PAD 0.05
 
-// processBox: cell ranges of at most max(this, marching scale) cells per axis are tested
+// boxBegin: cell ranges of at most max(this, marching scale) cells per axis are tested
 // cell by cell instead of split.
 #define OBLONG_TRAV_MIN_BOX_CELLS 1
 

@@ -8,7 +8,7 @@
 //      claimed between the crossings (claimNear), else by inversion.
 //   2. Split [tIn, tOut] where the curve may turn (ψ's turning points): monotone pieces.
 //      The ends inside and the turning points are made when their piece is first popped,
-//      at processPiece's one call site of the claim and of the inverter.
+//      at pieceEnd's one call site of the claim and of the inverter.
 //   3. A fixed-size stack of pieces, front to back. A piece whose rectangle is at most
 //      `marchingScale` texels is marched; otherwise its rectangle, dilated by ε and snapped
 //      outward to whole cells, is bounded (range query + interval arithmetic), the ray is
@@ -64,7 +64,7 @@
 #define OBLONG_RP_STAT_LEAF 8
 #define OBLONG_RP_STAT_BAD_INVERSION 9
 
-// A curve point setupCurve leaves to processPiece (an end of the ray inside the prism, a
+// A curve point setupCurve leaves to pieceEnd (an end of the ray inside the prism, a
 // turning point): its t is known, and pad.x (negative, which a made point's pad never is)
 // says how to make it.
 #define OBLONG_RP_PENDING_CLAIM (-1.0)   // claimed from uv (on the chord between the crossings), else inverted

@@ -6,7 +6,7 @@
 // The `g_` variables are the state of one ray against one triangle: C++ members, GLSL
 // globals. Each large step has one call site (the cells to test come from one generator,
 // nextCell, tested at one place in rpLoop; every claim near a known point and every
-// inversion is made in processPiece's one loop):
+// inversion is made in pieceEnd's one loop; every box is tested at one place in rpLoop):
 // GLSL inlines every call, and the inlined size is what the shader compiler pays for.
 
 // ---- the state ------------------------------------------------------------------------
@@ -176,27 +176,10 @@ bool clipToBox(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi, OBLONG_IN(vec2) h, OB
   clipBoxF(blo, bhi, g_bray, t0, t1);
   return t0 <= t1;
 }
-// The same with the range query's heights over the cells.
-bool clipToCells(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi, OBLONG_INOUT(double) t0, OBLONG_INOUT(double) t1) {
-  ivec2 o = g_origin;
-  ++g_rangeQueries;
-  ++g_boxes;
-  vec2 h = OBLONG_HOOK(rpToHeight)(OBLONG_HOOK(rpRangeRaw)(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y));
-  return clipToBox(clo, chi, h, t0, t1);
-}
-
-// One step of the march: a cell, rejected by its box (TFDM's leaf test: the four corner
-// samples bound every micro-vertex of the cell, docs/design.md invariant 2) or tested.
-void testCell(int i, int j) {
-  ++g_cells;
-  int I = i + g_origin.x, J = j + g_origin.y;
-  float a = OBLONG_HOOK(rpRaw)(I, J), b = OBLONG_HOOK(rpRaw)(I + 1, J);
-  float c = OBLONG_HOOK(rpRaw)(I, J + 1), e = OBLONG_HOOK(rpRaw)(I + 1, J + 1);
-  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = bestLimit();
-  vec2 h = OBLONG_HOOK(rpToHeight)(vec2(min(min(min(a, b), c), e), max(max(max(a, b), c), e)));
-  if (!clipToBox(ivec2(i, j), ivec2(i, j), h, t0, t1)) return;
-  g_microTris += OBLONG_HOOK(rpCellMicro)(I, J);
-}
+// Every box of the traversal (a piece's, a box range's, a marched cell's) is tested at one
+// place, rpLoop's box step: its heights come from the range query over the cells, or for
+// one marched cell from its four corner samples (TFDM's leaf test: they bound every
+// micro-vertex of the cell, docs/design.md invariant 2).
 
 // ---- the stack -----------------------------------------------------------------------------
 void pushPiece(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
@@ -433,7 +416,7 @@ bool pieceSmall(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   return ext[la] <= g_leafScale || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
 }
 
-// A piece too small to split is marched (processPiece), unless ε (float rounding at a
+// A piece too small to split is marched (pieceEnd), unless ε (float rounding at a
 // fine texel) is wide against the marching scale; then its cells are subdivided as boxes,
 // down to blocks of OBLONG_TRAV_WIDE_BOX_CELLS, which prune across the curve where the
 // march would test every cell within ε of it.
@@ -453,25 +436,36 @@ CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
   return p;
 }
 
-void processPiece(CurvePoint a, CurvePoint b) {
-  if (a.t > bestLimit()) return;
-  // An end setupCurve left pending is made first, in the loop below, and the piece goes
-  // back on the stack: the loop is the one call site of the claim and of the inverter.
-  bool pendA = pending(a), pend = pendA || pending(b);
-  ivec2 clo = ivec2(0), chi = ivec2(0);
-  double t0 = a.t, t1 = b.t;
-  OBLONG_PRECISE double minGain = 0.0;
-  // Not split: 1 = a leaf, 2 = marched at a stack overflow (one call site of the march).
-  int leaf = 0;
-  if (!pend && pieceSmall(a, b)) leaf = 1;
-  if (!pend) {
-    if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
-    // A marched leaf of two cells or more is box-tested first: a missed box skips it.
-    if (leaf == 0 || (!g_wideEps && (clo.x != chi.x || clo.y != chi.y))) {
-      t1 = min(b.t, bestLimit());
-      if (!clipToCells(clo, chi, t0, t1)) return;
-    }
+// A piece popped from the stack, before its box: 0 = nothing to do; 1 = box-test cells
+// [clo, chi] over [t0, t1] first (rpLoop), then pieceEnd; 2 = pieceEnd without a box.
+// leaf: 1 when the piece is too small to split.
+int pieceBegin(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi,
+               OBLONG_OUT(double) t0, OBLONG_OUT(double) t1, OBLONG_OUT(int) leaf) {
+  clo = ivec2(0);
+  chi = ivec2(0);
+  t0 = a.t;
+  t1 = b.t;
+  leaf = 0;
+  if (a.t > bestLimit()) return 0;
+  // An end setupCurve left pending is made first, in pieceEnd's loop, and the piece goes
+  // back on the stack: that loop is the one call site of the claim and of the inverter.
+  if (pending(a) || pending(b)) return 2;
+  if (pieceSmall(a, b)) leaf = 1;
+  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return 0;
+  // A marched leaf of two cells or more is box-tested first: a missed box skips it.
+  if (leaf == 0 || (!g_wideEps && (clo.x != chi.x || clo.y != chi.y))) {
+    t1 = min(b.t, bestLimit());
+    return 1;
   }
+  return 2;
+}
+
+// The rest of a piece after pieceBegin (and its box, which clipped [t0, t1]).
+void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, double t1, int leaf) {
+  bool pendA = pending(a), pend = pendA || pending(b);
+  OBLONG_PRECISE double minGain = 0.0;
+  // leaf, when not split: 1 = too small to split, 2 = marched at a stack overflow (set
+  // below; one call site of the march).
   if (!pend && leaf == 0) {
     // The clipped ends are worth a new point (Fig. 5a: their projections can give a much
     // smaller rectangle) when they gain this much.
@@ -552,17 +546,27 @@ void processPiece(CurvePoint a, CurvePoint b) {
   pushPiece(a, m);
 }
 
-void processBox(ivec2 clo, ivec2 chi, double ta, double tb) {
+// A box range popped from the stack, before its box: 0 = nothing more to do (beyond the
+// hit, or small: its cells are tested one by one); 1 = box-test it over [t0, t1] first
+// (rpLoop), then boxEnd.
+int boxBegin(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi, double ta, double tb, OBLONG_OUT(double) t0,
+             OBLONG_OUT(double) t1) {
   double limit = bestLimit();
-  if (ta > limit) return;
+  t0 = ta;
+  t1 = min(tb, limit);
+  if (ta > limit) return 0;
   ivec2 n = chi - clo + 1;
   float block = g_wideEps ? min(float(OBLONG_TRAV_WIDE_BOX_CELLS), g_marchingScale) : g_marchingScale;
   if (float(max(n.x, n.y)) <= max(float(OBLONG_TRAV_MIN_BOX_CELLS), block)) {
     startCells(clo, chi);
-    return;
+    return 0;
   }
-  double t0 = ta, t1 = min(tb, limit);
-  if (!clipToCells(clo, chi, t0, t1)) return;
+  return 1;
+}
+
+// A box range whose box [t0, t1] the ray crosses: halved along its longer side.
+void boxEnd(ivec2 clo, ivec2 chi, double t0, double t1) {
+  ivec2 n = chi - clo + 1;
   if (g_sp + 2 > g_stackDepth) {
     OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_OVERFLOW);
     startCells(clo, chi);
@@ -583,22 +587,61 @@ void processBox(ivec2 clo, ivec2 chi, double ta, double tb) {
   }
 }
 
-// Front to back until the stack and the current cell generator are empty.
+// Front to back until the stack and the current cell generator are empty. Each iteration
+// is one step: a marched cell, a box range or a piece; the box of every kind is tested at
+// one place (in a shader, one inlined copy of the box, the clip and the range query, and
+// the lanes of a warp test their boxes together whatever their steps).
 void rpLoop() {
   for (;;) {
+    int kind = 0;  // 1: a cell of the generator, 2: a box range, 3: a piece
+    ivec2 clo = ivec2(0), chi = ivec2(0);
     if (g_gen != 0) {
-      int ci, cj;
-      if (nextCell(ci, cj)) {
-        testCell(ci, cj);
-        continue;
-      }
-      g_gen = 0;
+      if (nextCell(clo.x, clo.y)) kind = 1;
+      else g_gen = 0;
     }
-    if (g_sp == 0) break;
-    --g_sp;
-    RpEntry e = g_st[g_sp];
-    if (isBox(e)) processBox(ivec2(e.a.uv), ivec2(e.b.uv), e.a.t, e.b.t);
-    else processPiece(e.a, e.b);
+    RpEntry e;
+    e.a = g_ma;  // read only for kinds 2 and 3 (GLSL wants it set)
+    e.b = g_ma;
+    if (kind == 0) {
+      if (g_sp == 0) break;
+      --g_sp;
+      e = g_st[g_sp];
+      kind = isBox(e) ? 2 : 3;
+    }
+    double t0, t1;
+    int leaf = 0, go;
+    if (kind == 1) {
+      ++g_cells;
+      chi = clo;
+      t0 = double(g_tmin) - slack(double(g_tmin));
+      t1 = bestLimit();
+      go = 1;
+    } else if (kind == 2) {
+      clo = ivec2(e.a.uv);
+      chi = ivec2(e.b.uv);
+      go = boxBegin(clo, chi, e.a.t, e.b.t, t0, t1);
+    } else {
+      go = pieceBegin(e.a, e.b, clo, chi, t0, t1, leaf);
+    }
+    if (go == 0) continue;
+    if (go == 1) {  // the box step
+      ivec2 o = g_origin;
+      vec2 raw;
+      if (kind == 1) {
+        int I = clo.x + o.x, J = clo.y + o.y;
+        float a = OBLONG_HOOK(rpRaw)(I, J), b = OBLONG_HOOK(rpRaw)(I + 1, J);
+        float c = OBLONG_HOOK(rpRaw)(I, J + 1), d = OBLONG_HOOK(rpRaw)(I + 1, J + 1);
+        raw = vec2(min(min(min(a, b), c), d), max(max(max(a, b), c), d));
+      } else {
+        ++g_rangeQueries;
+        ++g_boxes;
+        raw = OBLONG_HOOK(rpRangeRaw)(clo.x + o.x, clo.y + o.y, chi.x + 1 + o.x, chi.y + 1 + o.y);
+      }
+      if (!clipToBox(clo, chi, OBLONG_HOOK(rpToHeight)(raw), t0, t1)) continue;
+    }
+    if (kind == 1) g_microTris += OBLONG_HOOK(rpCellMicro)(clo.x + g_origin.x, clo.y + g_origin.y);
+    else if (kind == 2) boxEnd(clo, chi, t0, t1);
+    else pieceEnd(e.a, e.b, clo, chi, t0, t1, leaf);
   }
 }
 
@@ -640,7 +683,7 @@ int setupCurve() {
   g_dvd = dirLocal();
   // 2. Monotone pieces, between ψ's turning points. Their ends on the prism are the
   // crossings' claims; an end inside the prism (where the ray starts or ends) and the
-  // turning points are left pending, made by processPiece when their piece is popped.
+  // turning points are left pending, made by pieceEnd when their piece is popped.
   double ts[4];
   int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, ts);
   CurvePoint pts[6];

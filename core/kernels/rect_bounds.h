@@ -168,7 +168,10 @@ OBLONG_INLINE BoxRayF boxRayF(OBLONG_IN(dvec3) Ot, OBLONG_IN(dvec3) Dt, OBLONG_I
   BoxRayF R;
   OBLONG_PRECISE dvec3 o = Ot - anchor;
   R.O = vec3(o);
-  R.invD = vec3(1.0 / Dt);
+  for (int k = 0; k < 3; ++k) {  // ∞ where D's component is 0; else finite (a float conversion must not overflow)
+    double id = 1.0 / Dt[k];
+    R.invD[k] = isinfD(id) ? float(id) : float(clamp(id, -3.0e38, 3.0e38));
+  }
   for (int k = 0; k < 3; ++k) R.oErr[k] = floatAbove(4.0 * OBLONG_U2M22 * abs(o[k]), abs(Ot[k]) + abs(anchor[k]));
   return R;
 }
