@@ -628,10 +628,13 @@ void rpLoop() {
       ivec2 o = g_origin;
       vec2 raw;
       if (kind == 1) {
-        int I = clo.x + o.x, J = clo.y + o.y;
-        float a = OBLONG_HOOK(rpRaw)(I, J), b = OBLONG_HOOK(rpRaw)(I + 1, J);
-        float c = OBLONG_HOOK(rpRaw)(I, J + 1), d = OBLONG_HOOK(rpRaw)(I + 1, J + 1);
-        raw = vec2(min(min(min(a, b), c), d), max(max(max(a, b), c), d));
+        // The four corners from one call site (each is a copy of the texel lookup with
+        // its level-of-detail blend in a shader); heights are finite (HeightMap).
+        raw = vec2(kInfF, -kInfF);
+        for (int k = 0; k < 4; ++k) {
+          float v = OBLONG_HOOK(rpRaw)(clo.x + o.x + (k & 1), clo.y + o.y + (k >> 1));
+          raw = vec2(min(raw.x, v), max(raw.y, v));
+        }
       } else {
         ++g_rangeQueries;
         ++g_boxes;
