@@ -106,7 +106,7 @@
 #define OBLONG_TRAV_MIN_GAIN 1e-3
 #define OBLONG_TRAV_MIN_GAIN_CELLS 0.5
 
-// Curve points claimed without an inversion (claimNear) are kept only when
+// Curve points claimed without an inversion (curvePointAt) are kept only when
 // their pad (texels, both axes together) is at most this; else the point is inverted.
 #define OBLONG_TRAV_CLAIM_PAD 0.05
 

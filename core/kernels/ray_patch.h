@@ -5,7 +5,7 @@
 // triangle (docs/traversal.md has the reasoning):
 //   1. Clip the ray to the triangle's inflated prism; its crossings give [tIn, tOut] and
 //      the uv of its ends; a ray starting (or ending) inside gets its end's uv from a point
-//      claimed between the crossings (claimNear), else by inversion.
+//      claimed between the crossings (curvePointAt), else by inversion.
 //   2. Split [tIn, tOut] where the curve may turn (ψ's turning points): monotone pieces.
 //      The ends inside and the turning points are made when their piece is first popped,
 //      at pieceEnd's one call site of the claim and of the inverter.

@@ -86,24 +86,46 @@ bool claimPoint(double t, OBLONG_IN(dvec2) b, double s, OBLONG_OUT(CurvePoint) o
   return makePoint(g_F, g_claim, g_O, g_D, t, b, s, outp);
 }
 
-// The curve point at t by inversion.
-bool invertAt(double t, OBLONG_OUT(CurvePoint) outp) {
-  outp.t = t;
-  outp.uv = dvec2(0.0);
-  outp.pad = dvec2(0.0);
+// Prism coordinates (b, s) for the curve point at t: by the inverter (invert), or claimed
+// without it from uv g near the point (on the chord between two curve points, chordUv): s
+// by least squares and one Newton step in double (newtonClaim). Either way makePoint's
+// residual bounds the point's error.
+bool coordsAt(double t, OBLONG_IN(dvec2) g, bool invert, OBLONG_OUT(dvec2) b, OBLONG_OUT(double) s) {
+  b = dvec2(0.0);
+  s = 0.0;
+  if (!invert) return newtonClaim(g_F, g_O, g_D, t, frameBary(g_F, g), b, s);
   ++g_inversions;
   OBLONG_PRECISE dvec3 X = g_O + t * g_D;
   vec2 bary;
   float h;
   OBLONG_HOOK(rpInvert)(vec3(X), bary, h);
-  dvec2 b = dvec2(bary);
+  b = dvec2(bary);
   double nl = lengthD(frameN(g_F, b));
-  if (!(nl > 0.0) || !finiteF(h) || !claimPoint(t, b, double(h) / nl, outp)) {
-    OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BAD_INVERSION);
-    return false;
-  }
+  if (!(nl > 0.0) || !finiteF(h)) return false;
+  s = double(h) / nl;
   return true;
 }
+
+// The curve point at t: claimed near g first when `claim` (kept only when its pad is at
+// most OBLONG_TRAV_CLAIM_PAD), else or then by inversion. One call site of the claim's
+// residual (makePoint) for both.
+bool curvePointAt(double t, OBLONG_IN(dvec2) g, bool claim, OBLONG_OUT(CurvePoint) outp) {
+  outp.t = t;
+  outp.uv = dvec2(0.0);
+  outp.pad = dvec2(0.0);
+  for (int at = claim ? 0 : 1; at < 2; ++at) {
+    dvec2 b;
+    double s;
+    if (coordsAt(t, g, at == 1, b, s) && claimPoint(t, b, s, outp) &&
+        (at == 1 || outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD))
+      return true;
+  }
+  OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BAD_INVERSION);
+  return false;
+}
+
+// The curve point at t by inversion.
+bool invertAt(double t, OBLONG_OUT(CurvePoint) outp) { return curvePointAt(t, dvec2(0.0), false, outp); }
 
 // The curve point on {axis = c}, unique, strictly between the piece's ends (closed form
 // on ψ, paper Eq. 3-4; the splitters' SplitContext::crossing).
@@ -128,21 +150,6 @@ bool crossingAt(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, do
     ++found;
   }
   return found == 1;
-}
-
-// The curve point at t without an inversion, from uv g near it (on the chord between two
-// curve points, chordUv): s by least squares, one Newton step in double (newtonClaim);
-// makePoint's residual bound holds for any claim. Refused when its pad exceeds
-// OBLONG_TRAV_CLAIM_PAD.
-bool claimNear(double t, OBLONG_IN(dvec2) g, OBLONG_OUT(CurvePoint) outp) {
-  outp.t = t;
-  outp.uv = dvec2(0.0);
-  outp.pad = dvec2(0.0);
-  dvec2 nb;
-  double ns;
-  if (!newtonClaim(g_F, g_O, g_D, t, frameBary(g_F, g), nb, ns)) return false;
-  if (!claimPoint(t, nb, ns, outp)) return false;
-  return outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD;
 }
 
 // The curve point at t from the closest hit instead of an inversion: the hit's texture
@@ -506,7 +513,7 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
       need = r == 2;
     }
     CurvePoint q;
-    if (need && ((claim && claimNear(t, g, q)) || invertAt(t, q))) {
+    if (need && curvePointAt(t, g, claim, q)) {
       if (e < 0) {
         if ((pendA ? a : b).pad.x == OBLONG_RP_PENDING_TURN) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);
         if (pendA) a = q;
