@@ -607,7 +607,7 @@ void rpLoop() {
       else g_gen = 0;
     }
     RpEntry e;
-    e.a = g_ma;  // read only for kinds 2 and 3 (GLSL wants it set)
+    e.a = g_ma;  // e is read only for kinds 2 and 3; set so that no compiler sees it read unset
     e.b = g_ma;
     if (kind == 0) {
       if (g_sp == 0) break;
