@@ -181,6 +181,41 @@ TEST_CASE("the ray's curve is monotone between the turning points", "[traversal]
   CHECK(splits > 0);  // some rays do turn
 }
 
+namespace {
+
+// T's shell analysis with its heights from its own micro-vertices.
+PrismParams shellOf(const DisplacedTriangle& T, const Displacement& d, float delta) {
+  Interval hT;
+  for (const auto& m : microTriangles(T, d))
+    for (const auto& v : m.v) hT.extend(d.micro(v.uv));
+  return analyzeShell(T, d, hT, delta);
+}
+
+// A random range of T's cells (absolute), the heights over its cells' corners (exact), and
+// its rectangle in local sample coordinates clipped to T's uv box, as the traversals pass
+// it to their boxes.
+struct CellRect {
+  CellRange cells;
+  Interval h;
+  dvec2 lo, hi;
+};
+CellRect randomCellRect(std::mt19937& rng, const CellRange& cr, const Displacement& d, const DisplacedTriangle& T,
+                        const LocalFrame& F) {
+  std::uniform_int_distribution<int> X(cr.x0, cr.x1), Y(cr.y0, cr.y1);
+  int x0 = X(rng), x1 = X(rng), y0 = Y(rng), y1 = Y(rng);
+  if (x0 > x1) std::swap(x0, x1);
+  if (y0 > y1) std::swap(y0, y1);
+  CellRect r{CellRange{x0, y0, x1, y1}, Interval{}, dvec2(0.0), dvec2(0.0)};
+  for (int j = y0; j <= y1 + 1; ++j)
+    for (int i = x0; i <= x1 + 1; ++i) r.h.extend(d.sampleHeight(i, j));
+  const dvec2 sb0 = d.toSample(T.uvBox.lo) - dvec2(F.origin), sb1 = d.toSample(T.uvBox.hi) - dvec2(F.origin);
+  r.lo = glm::max(dvec2(x0, y0) - dvec2(F.origin), sb0);
+  r.hi = glm::min(dvec2(x1 + 1, y1 + 1) - dvec2(F.origin), sb1);
+  return r;
+}
+
+}  // namespace
+
 TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "[traversal][prism][unit]") {
   std::mt19937 rng(7);
   for (const Scenario& s : {coarseTorus(), sphere()}) {
@@ -189,24 +224,11 @@ TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "
       const DisplacedTriangle& T = s.tris[k];
       const LocalFrame F = LocalFrame::make(T, s.disp);
       const CellRange cr = cellsOverlapping(T, s.disp);
-      const auto micro = microTriangles(T, s.disp);
-      Interval hT;
-      for (const auto& m : micro)
-        for (const auto& v : m.v) hT.extend(s.disp.micro(v.uv));
-      const PrismParams P = analyzeShell(T, s.disp, hT, delta);
+      const PrismParams P = shellOf(T, s.disp, delta);
       for (int q = 0; q < 20; ++q) {
-        std::uniform_int_distribution<int> X(cr.x0, cr.x1), Y(cr.y0, cr.y1);
-        int x0 = X(rng), x1 = X(rng), y0 = Y(rng), y1 = Y(rng);
-        if (x0 > x1) std::swap(x0, x1);
-        if (y0 > y1) std::swap(y0, y1);
-        // Heights over the cells' corners (exact).
-        Interval h;
-        for (int j = y0; j <= y1 + 1; ++j)
-          for (int i = x0; i <= x1 + 1; ++i) h.extend(s.disp.sampleHeight(i, j));
-        const dvec2 sb0 = s.disp.toSample(T.uvBox.lo) - dvec2(F.origin), sb1 = s.disp.toSample(T.uvBox.hi) - dvec2(F.origin);
-        const dvec2 lo = glm::max(dvec2(x0, y0) - dvec2(F.origin), sb0);
-        const dvec2 hi = glm::min(dvec2(x1 + 1, y1 + 1) - dvec2(F.origin), sb1);
-        const BoxD box = boxOverRect(F, invNormalLengthBound(T.minNormalLength), lo, hi, h.lo, h.hi, P.vertexErr);
+        const CellRect r = randomCellRect(rng, cr, s.disp, T, F);
+        const int x0 = r.cells.x0, x1 = r.cells.x1, y0 = r.cells.y0, y1 = r.cells.y1;
+        const BoxD box = boxOverRect(F, invNormalLengthBound(T.minNormalLength), r.lo, r.hi, r.h.lo, r.h.hi, P.vertexErr);
         forEachMicroTriangle(T, s.disp, CellRange{x0, y0, x1, y1}, [&](const MicroTriangle& m) {
           for (const auto& v : m.v) {
             const dvec3 p(v.p);
@@ -241,25 +263,13 @@ TEST_CASE("the float box holds its cells' micro-vertices, and its slab test the 
         const LocalFrame F = LocalFrame::make(T, s.disp);
         const CellRange cr = cellsOverlapping(T, s.disp);
         const TextureFrame X = TextureFrame::make(F, T, cr);
-        const auto micro = microTriangles(T, s.disp);
-        Interval hT;
-        for (const auto& m : micro)
-          for (const auto& v : m.v) hT.extend(s.disp.micro(v.uv));
-        const PrismParams P = analyzeShell(T, s.disp, hT, delta);
+        const PrismParams P = shellOf(T, s.disp, delta);
         const float pad = shared::floatAbove(P.vertexErr, P.vertexErr);
         for (int q = 0; q < 12; ++q) {
-          std::uniform_int_distribution<int> XI(cr.x0, cr.x1), YI(cr.y0, cr.y1);
-          int x0 = XI(rng), x1 = XI(rng), y0 = YI(rng), y1 = YI(rng);
-          if (x0 > x1) std::swap(x0, x1);
-          if (y0 > y1) std::swap(y0, y1);
-          Interval h;
-          for (int j = y0; j <= y1 + 1; ++j)
-            for (int i = x0; i <= x1 + 1; ++i) h.extend(s.disp.sampleHeight(i, j));
-          const dvec2 sb0 = s.disp.toSample(T.uvBox.lo) - dvec2(F.origin), sb1 = s.disp.toSample(T.uvBox.hi) - dvec2(F.origin);
-          const vec2 lo = vec2(glm::max(dvec2(x0, y0) - dvec2(F.origin), sb0));
-          const vec2 hi = vec2(glm::min(dvec2(x1 + 1, y1 + 1) - dvec2(F.origin), sb1));
+          const CellRect r = randomCellRect(rng, cr, s.disp, T, F);
+          const int x0 = r.cells.x0, x1 = r.cells.x1, y0 = r.cells.y0, y1 = r.cells.y1;
           vec3 blo, bhi;
-          shared::boxOverRectF(X.box, lo, hi, h.lo, h.hi, pad, blo, bhi);
+          shared::boxOverRectF(X.box, vec2(r.lo), vec2(r.hi), r.h.lo, r.h.hi, pad, blo, bhi);
           forEachMicroTriangle(T, s.disp, CellRange{x0, y0, x1, y1}, [&](const MicroTriangle& m) {
             for (const auto& v : m.v) {
               const dvec3 pt = X.rot(dvec3(v.p)) - X.Pc;  // the vertex in the frame, relative to the anchor
