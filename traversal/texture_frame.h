@@ -1,7 +1,8 @@
 // T's texture frame: an orthonormal basis with the map's u direction (LocalFrame::PX)
 // first and the face normal last, and T's P and N (LocalFrame's Pc, PX, PY, Nc, NX, NY)
-// expressed in it, in float relative to Pc (boxOverRectF's frame). A box in it bounds the same micro-geometry as on the world's
-// axes (the interval arithmetic holds in any orthonormal basis, and |N| is unchanged),
+// expressed in it, in float relative to Pc (boxOverRectF's frame). A box in it bounds the
+// same micro-geometry as on the world's axes (the interval arithmetic holds in any
+// orthonormal basis, and |N| is unchanged),
 // with boxes aligned to the texels' sides and to the base surface: on a triangle that does
 // not face a world axis, a height interval then bounds one side of the box instead of
 // being smeared over all three (TFDM's boxes, Thonat et al. 2021 §4; docs/traversal.md).
