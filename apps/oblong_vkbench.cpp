@@ -6,6 +6,8 @@
 //                  [--repeat K] [--seed S] [--out stats.json] [--hits hits.csv] [--rays-out rays.bin]
 //   oblong_vkbench SCENE.oblg [--size WxH] [--spp S] --rays-out rays.bin --no-trace   (the rays only)
 //   oblong_vkbench --checksum HITS.csv   (the hit checksum of a hits file, e.g. `oblong trace`'s)
+//   oblong_vkbench --pipeline-stats [--spirv DIR] [--out pipelines.json]
+//                  (the driver's statistics of both pipelines: registers, binary size, ...)
 // The hit checksum is checksum64 of the hits CSV of the camera rays, byte for byte the
 // file `oblong trace` writes for the same rays (render/rays_io.h), so the CPU's and the
 // GPU's answers compare by one number.
@@ -164,8 +166,45 @@ class Bench final : public TraceBackend {
   mutable std::vector<Pass> passes_;  // the dispatches so far (trace calls are const)
 };
 
+// --pipeline-stats: the driver's statistics of both pipelines (runner.h), printed and as JSON.
+int pipelineStats(const std::string& spirvDir, const std::string& out) {
+  const PipelineStatistics P = pipelineStatistics(spirvDir);
+  const std::string source = spirvDir.empty() ? "this build's SPIR-V" : spirvDir;
+  nlohmann::json j;
+  j["device"] = {{"api", "vulkan"}, {"name", P.device}, {"driver", P.driver}};
+  j["spirv"] = spirvDir.empty() ? "built in" : spirvDir;
+  j["supported"] = P.supported;
+  j["programs"] = nlohmann::json::array();
+  fmt::print("oblong_vkbench: pipeline statistics of {} on {} ({}){}\n", source, P.device, P.driver,
+             P.supported ? ""
+                         : ": the device does not report them (no VK_KHR_pipeline_executable_properties); "
+                           "both pipelines were created");
+  for (const PipelineProgram& prog : P.programs) {
+    nlohmann::json pj = {{"method", prog.method}, {"stage", prog.stage}, {"executables", nlohmann::json::array()}};
+    for (const PipelineExecutable& e : prog.executables) {
+      nlohmann::json ej = {{"name", e.name}, {"description", e.description}, {"stages", e.stages},
+                           {"subgroup_size", e.subgroupSize}, {"statistics", nlohmann::json::array()}};
+      std::string line;
+      for (const PipelineStatistic& st : e.statistics) {
+        ej["statistics"].push_back({{"name", st.name}, {"value", st.value}, {"description", st.description}});
+        line += fmt::format("{}{} {:.6g}", line.empty() ? "" : ", ", st.name, st.value);
+      }
+      pj["executables"].push_back(std::move(ej));
+      fmt::print("{} ({}): {} [{}]: {}\n", prog.method, prog.stage, e.name, e.stages,
+                 line.empty() ? "no statistics" : line);
+    }
+    j["programs"].push_back(std::move(pj));
+  }
+  if (!out.empty()) {
+    const std::string text = j.dump(2) + "\n";
+    writeFile(out, text.data(), text.size());
+  }
+  return 0;
+}
+
 struct Options {
-  std::string file, out, hitsOut, raysOut, checksumOf, size, integrator = "primary";
+  std::string file, out, hitsOut, raysOut, checksumOf, size, integrator = "primary", spirvDir;
+  bool pipelineStats = false;
   int64_t rays = 0;
   int spp = 1, repeat = 3;
   uint64_t seed = 0;
@@ -173,6 +212,11 @@ struct Options {
 };
 
 int run(const Options& o) {
+  if (o.pipelineStats) {
+    if (!o.file.empty()) fail("--pipeline-stats", "takes no scene (got '{}')", o.file);
+    return pipelineStats(o.spirvDir, o.out);
+  }
+  if (!o.spirvDir.empty()) fail("--spirv", "only applies with --pipeline-stats");
   if (!o.checksumOf.empty()) {
     std::ifstream f(o.checksumOf, std::ios::binary);
     if (!f) fail(o.checksumOf, "cannot open hits file");
@@ -348,6 +392,10 @@ int main(int argc, char** argv) {
   app.add_option("--rays-out", o.raysOut, "the camera rays as .bin (8 float32 a ray: `oblong trace --rays`)");
   app.add_flag("--no-trace", o.noTrace, "write --rays-out and exit (no Vulkan device needed)");
   app.add_option("--checksum", o.checksumOf, "print the hit checksum of a hits CSV and exit");
+  app.add_flag("--pipeline-stats", o.pipelineStats,
+               "print (and with --out write) the driver's statistics of both pipelines and exit");
+  app.add_option("--spirv", o.spirvDir, "with --pipeline-stats: the stages' NAME.spv from this folder (another "
+                                        "build's shaders) instead of the built-in ones");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -17,7 +17,10 @@
 # each scene's two baked files in one NAME.tar.xz, one xz stream whose dictionary spans
 # both, since the two methods' prism records are mostly the same bytes; run.sh unpacks
 # them with xz and tar, else python3; 0: uncompressed), OBLONG_BUNDLE_GLIBC (1, the
-# default: this machine's glibc, ~3 MiB, for a GPU machine with an older one; 0: not).
+# default: this machine's glibc, ~3 MiB, for a GPU machine with an older one; 0: not),
+# OBLONG_BUNDLE_BASELINE (a commit whose shaders run.sh compiles into pipelines beside the
+# build's, for the driver's statistics before and after: default 5cac6cc, where the
+# GPU-first work began; empty: none).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
@@ -34,6 +37,25 @@ rm -rf "$BUNDLE"
 mkdir -p "$BUNDLE"/{bin,lib,shaders,scenes}
 cp "$VK" "$BUNDLE/bin/"
 cp "$BUILD"/vulkan_shaders/*.spv "$BUNDLE/shaders/"
+# The baseline commit's shaders, compiled as the build compiles its own (CMakeLists.txt:
+# glslc -O, the default stack of 32 entries), for run.sh's pipeline statistics.
+BASELINE="${OBLONG_BUNDLE_BASELINE-5cac6cc}"
+if [ -n "$BASELINE" ]; then
+  base="$(mktemp -d)"
+  if git -C "$ROOT" archive "$BASELINE" render/vulkan/shaders core/kernels 2>"$base/err.txt" | tar -x -C "$base" 2>>"$base/err.txt" &&
+     [ -f "$base/render/vulkan/shaders/prism.rint" ]; then
+    mkdir -p "$BUNDLE/shaders_baseline"
+    for st in trace.rgen trace.rmiss prism.rint tfdm.rint prism.rchit triangle.rchit; do
+      glslc --target-env=vulkan1.2 -DOBLONG_TRAV_STACK_GPU=32 -I "$base" -O \
+        -o "$BUNDLE/shaders_baseline/$st.spv" "$base/render/vulkan/shaders/$st" 2>>"$base/err.txt" ||
+        { say "baseline $BASELINE: left out: glslc $st: $(tail -1 "$base/err.txt")"; rm -rf "$BUNDLE/shaders_baseline"; break; }
+    done
+    [ -d "$BUNDLE/shaders_baseline" ] && git -C "$ROOT" rev-parse --short "$BASELINE" >"$BUNDLE/shaders_baseline/commit.txt"
+  else
+    say "baseline $BASELINE: left out: $(tail -1 "$base/err.txt")"
+  fi
+  rm -rf "$base"
+fi
 # The loader, for machines without one (run.sh uses it only when none is found).
 loader="$(ldd "$VK" | awk '/libvulkan.so.1/ {print $3}')"
 [ -n "$loader" ] && cp -L "$loader" "$BUNDLE/lib/libvulkan.so.1"
@@ -119,7 +141,10 @@ cat >"$BUNDLE/run.sh" <<'RUN'
 # time is left, each timed per pass by timestamp queries, repeated (the median is
 # reported). Writes RESULTS_DIR:
 # one JSON per run, run.log, summary.txt and table.md (the paper's Table 1 layout: ms per
-# frame, Mrays/s, bytes, speed-up over tfdm). The whole run stays under
+# frame, Mrays/s, bytes, speed-up over tfdm), pipelines.json and pipelines.txt (the
+# driver's statistics of both pipelines: registers, binary size, ..., where the driver
+# reports them) and pipelines_baseline.* (the same for the bundled baseline commit's
+# shaders). The whole run stays under
 # OBLONG_RUN_SECONDS (default 450: 7.5 minutes); --quick: parity and primary rays only
 # (3 repeats), under 120 s. Exit status 1 when a parity checksum differs or was not
 # measured.
@@ -216,6 +241,14 @@ for f in $files; do  # parity first: the checksums are the point
   [ "$got" = "$want" ] && verdict=SAME || { verdict=DIFFERENT; status=1; }
   echo "$s parity $PARITY: GPU checksum $got, CPU $want: $verdict" | tee -a "$summary"
 done
+# The driver's statistics of both pipelines (VK_KHR_pipeline_executable_properties), this
+# build's shaders and the baseline commit's: seconds each, before any timing.
+stats() { local name="$1"; shift; run "$name" --pipeline-stats "$@" | tee "$OUT/$name.txt"; }
+stats pipelines
+if [ -d "$HERE/shaders_baseline" ]; then
+  stats pipelines_baseline --spirv "$HERE/shaders_baseline"
+  echo "baseline commit: $(cat "$HERE/shaders_baseline/commit.txt" 2>/dev/null)" >>"$OUT/pipelines_baseline.txt"
+fi
 reps=5; [ "$QUICK" = 1 ] && reps=3
 for f in $files; do
   s="$(basename "$f" .oblg)"
@@ -270,6 +303,12 @@ ratio() { [ -n "$1" ] && [ -n "$2" ] && [ "$1" != "–" ] && [ "$2" != "–" ] &
         echo "| $s | tfdm | $(ms "$p") | $(mr "$p") | $(ms "$q") | $(mr "$q") | $(mib "$struct") | $(mib "$(field "$src" memory_total)") | 1 | $v |"
       fi
     done
+  done
+  echo
+  echo "Pipelines (the driver's statistics, pipelines.txt; the baseline commit's shaders: pipelines_baseline.txt):"
+  echo
+  for t in "$OUT"/pipelines.txt "$OUT"/pipelines_baseline.txt; do
+    [ -f "$t" ] && sed 's/^/    /' "$t"
   done
 } >"$OUT/table.md"
 cat "$OUT/table.md"

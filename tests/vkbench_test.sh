@@ -104,4 +104,19 @@ expect_error "truncated header" "truncated" "$VKBENCH" header.oblg
 expect_error "foreign" "not an oblong baked scene" "$VKBENCH" "$(scene_file asteroid)"
 expect_error "corrupt" "corrupt" "$VKBENCH" corrupt.oblg
 expect_error "missing" "cannot open" "$VKBENCH" missing.oblg
+
+# --pipeline-stats: both pipelines created (lavapipe reports no statistics: supported
+# false), from the built-in SPIR-V; --spirv reads another folder's, one line on a bad one.
+"$VKBENCH" --pipeline-stats --out stats.json >out.txt 2>err.txt || fail "--pipeline-stats: $(cat err.txt)"
+python3 - stats.json <<'PY' || fail "--pipeline-stats: $(cat stats.json)"
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert [p["method"] for p in j["programs"]] == ["canonical", "tfdm"] and j["spirv"] == "built in", j
+PY
+mkdir -p spirv
+printf 'not spir-v' >spirv/trace.rgen.spv
+expect_error "--spirv missing" "cannot open the SPIR-V module" "$VKBENCH" --pipeline-stats --spirv nowhere
+expect_error "--spirv foreign" "not a SPIR-V module" "$VKBENCH" --pipeline-stats --spirv spirv
+expect_error "--spirv without --pipeline-stats" "only applies with --pipeline-stats" "$VKBENCH" asteroid.oblg --spirv spirv
+expect_error "--pipeline-stats with a scene" "takes no scene" "$VKBENCH" asteroid.oblg --pipeline-stats
 say "PASS"

@@ -18,10 +18,13 @@
 #include <cstddef>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <iterator>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <vector>
 
 namespace oblong::vk {
 
@@ -53,13 +56,15 @@ const uint32_t kTfdmRint[] = {
 // report.
 struct IntersectionProgram {
   int method;
+  const char* name;   // the method's name (--method, --baseline)
+  const char* stage;  // its shader's file, as the build names it (vulkan_shaders/STAGE.spv)
   const uint32_t* code;
   size_t bytes;
   const char* pyramid;
 };
 const IntersectionProgram kPrograms[] = {
-    {OBLONG_METHOD_CANONICAL, kRint, sizeof kRint, "vulkan/rmip_layers"},
-    {OBLONG_METHOD_TFDM, kTfdmRint, sizeof kTfdmRint, "vulkan/tfdm_mipmap"},
+    {OBLONG_METHOD_CANONICAL, "canonical", "prism.rint", kRint, sizeof kRint, "vulkan/rmip_layers"},
+    {OBLONG_METHOD_TFDM, "tfdm", "tfdm.rint", kTfdmRint, sizeof kTfdmRint, "vulkan/tfdm_mipmap"},
 };
 constexpr size_t kProgramCount = std::size(kPrograms);
 
@@ -87,6 +92,15 @@ struct Buffer {
   void* map = nullptr;
   VkDeviceAddress addr = 0;
 };
+
+// One stage's SPIR-V.
+struct StageCode {
+  const uint32_t* code;
+  size_t bytes;
+};
+// The stages' files as the build names them (vulkan_shaders/NAME.spv), in the pipeline's
+// order; the intersection stage's is kPrograms' own.
+const char* const kStageFiles[5] = {"trace.rgen", "trace.rmiss", nullptr, "prism.rchit", "triangle.rchit"};
 
 // A ray-tracing pipeline and its shader binding table's regions.
 struct Pipeline {
@@ -121,6 +135,11 @@ struct Device {
   PFN_vkCreateRayTracingPipelinesKHR createPipelines = nullptr;
   PFN_vkGetRayTracingShaderGroupHandlesKHR groupHandles = nullptr;
   PFN_vkCmdTraceRaysKHR cmdTraceRays = nullptr;
+  // VK_KHR_pipeline_executable_properties, enabled only on a device made for
+  // pipelineStatistics (where the device has it): the timed runs' device stays as it was.
+  bool executableInfo = false;
+  PFN_vkGetPipelineExecutablePropertiesKHR executableProps = nullptr;
+  PFN_vkGetPipelineExecutableStatisticsKHR executableStats = nullptr;
 
   std::vector<Buffer> buffers;  // the shader binding tables, freed in the destructor
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
@@ -133,9 +152,9 @@ struct Device {
   // fence and the query pool.
   std::mutex mutex;
 
-  Device() {
+  explicit Device(bool wantExecutableInfo = false) {
     try {  // a constructor that throws runs no destructor: release what was created
-      create();
+      create(wantExecutableInfo);
     } catch (...) {
       destroy();
       throw;
@@ -143,7 +162,7 @@ struct Device {
   }
   ~Device() { destroy(); }
 
-  void create() {
+  void create(bool wantExecutableInfo) {
     VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
     app.pApplicationName = "oblong";
     app.apiVersion = VK_API_VERSION_1_2;
@@ -161,7 +180,7 @@ struct Device {
                               "installed by scripts/setup.sh)");
     check(r, "vkCreateInstance");
     pickDevice();
-    createDevice();
+    createDevice(wantExecutableInfo);
     createLayouts();
   }
 
@@ -224,7 +243,16 @@ struct Device {
     vkGetPhysicalDeviceMemoryProperties(phys, &memProps);
   }
 
-  void createDevice() {
+  bool hasExtension(const char* name) const {
+    uint32_t ne = 0;
+    vkEnumerateDeviceExtensionProperties(phys, nullptr, &ne, nullptr);
+    std::vector<VkExtensionProperties> ext(ne);
+    vkEnumerateDeviceExtensionProperties(phys, nullptr, &ne, ext.data());
+    return std::any_of(ext.begin(), ext.end(),
+                       [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, name) == 0; });
+  }
+
+  void createDevice(bool wantExecutableInfo) {
     uint32_t nq = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(phys, &nq, nullptr);
     std::vector<VkQueueFamilyProperties> qf(nq);
@@ -248,13 +276,26 @@ struct Device {
     v12.bufferDeviceAddress = VK_TRUE;
     v12.scalarBlockLayout = VK_TRUE;
     v12.shaderStorageBufferArrayNonUniformIndexing = VK_TRUE;
-    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
+    VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR exf{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR};
+    std::vector<const char*> extensions(std::begin(kDeviceExtensions), std::end(kDeviceExtensions));
+    if (wantExecutableInfo && hasExtension(VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME)) {
+      VkPhysicalDeviceFeatures2 q{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &exf};
+      vkGetPhysicalDeviceFeatures2(phys, &q);
+      executableInfo = exf.pipelineExecutableInfo == VK_TRUE;
+    }
+    if (executableInfo) {
+      extensions.push_back(VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
+      exf.pNext = &v12;
+    }
+    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2,
+                                 executableInfo ? static_cast<void*>(&exf) : static_cast<void*>(&v12)};
     f2.features.shaderFloat64 = VK_TRUE;
     VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
     dci.queueCreateInfoCount = 1;
     dci.pQueueCreateInfos = &qci;
-    dci.enabledExtensionCount = uint32_t(std::size(kDeviceExtensions));
-    dci.ppEnabledExtensionNames = kDeviceExtensions;
+    dci.enabledExtensionCount = uint32_t(extensions.size());
+    dci.ppEnabledExtensionNames = extensions.data();
     check(vkCreateDevice(phys, &dci, nullptr, &device), "vkCreateDevice");
     vkGetDeviceQueue(device, family, 0, &queue);
     auto load = [&](auto& fn, const char* name) {
@@ -269,6 +310,10 @@ struct Device {
     load(createPipelines, "vkCreateRayTracingPipelinesKHR");
     load(groupHandles, "vkGetRayTracingShaderGroupHandlesKHR");
     load(cmdTraceRays, "vkCmdTraceRaysKHR");
+    if (executableInfo) {
+      load(executableProps, "vkGetPipelineExecutablePropertiesKHR");
+      load(executableStats, "vkGetPipelineExecutableStatisticsKHR");
+    }
     VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
     pci.queueFamilyIndex = family;
@@ -420,28 +465,17 @@ struct Device {
 
   }
 
-  // The pipeline of kPrograms[program] (its intersection shader, the other stages
-  // shared), created at its first use.
-  const Pipeline& pipeline(size_t program) {
-    if (pipelines[program].pipeline) return pipelines[program];
-    const IntersectionProgram& prog = kPrograms[program];
-    // Built aside and stored whole: a failure half-way leaves no half-made pipeline to reuse.
-    Pipeline P;
-    struct Stage {
-      VkShaderStageFlagBits stage;
-      const uint32_t* code;
-      size_t bytes;
-    };
-    const Stage st[5] = {{VK_SHADER_STAGE_RAYGEN_BIT_KHR, kRgen, sizeof kRgen},
-                         {VK_SHADER_STAGE_MISS_BIT_KHR, kMiss, sizeof kMiss},
-                         {VK_SHADER_STAGE_INTERSECTION_BIT_KHR, prog.code, prog.bytes},
-                         {VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, kPrismHit, sizeof kPrismHit},
-                         {VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, kTriangleHit, sizeof kTriangleHit}};
+  // A ray-tracing pipeline of five stages (kStageFiles' order: raygen, miss, intersection,
+  // the prism's and the triangles' closest hit) and four groups.
+  VkPipeline createPipeline(const StageCode (&code)[5], VkPipelineCreateFlags flags) {
+    const VkShaderStageFlagBits kind[5] = {VK_SHADER_STAGE_RAYGEN_BIT_KHR, VK_SHADER_STAGE_MISS_BIT_KHR,
+                                           VK_SHADER_STAGE_INTERSECTION_BIT_KHR, VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR,
+                                           VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR};
     VkPipelineShaderStageCreateInfo stages[5];
     for (int i = 0; i < 5; ++i) {
       stages[i] = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-      stages[i].stage = st[i].stage;
-      stages[i].module = module(st[i].code, st[i].bytes);
+      stages[i].stage = kind[i];
+      stages[i].module = module(code[i].code, code[i].bytes);
       stages[i].pName = "main";
     }
     auto group = [](VkRayTracingShaderGroupTypeKHR type, uint32_t general, uint32_t chit, uint32_t isect) {
@@ -468,8 +502,26 @@ struct Device {
     rpci.pGroups = groups;
     rpci.maxPipelineRayRecursionDepth = 1;
     rpci.layout = pipeLayout;
-    check(createPipelines(device, VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &rpci, nullptr, &P.pipeline),
+    rpci.flags = flags;
+    VkPipeline pipe = VK_NULL_HANDLE;
+    check(createPipelines(device, VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &rpci, nullptr, &pipe),
           "vkCreateRayTracingPipelinesKHR");
+    return pipe;
+  }
+
+  // The pipeline of kPrograms[program] (its intersection shader, the other stages
+  // shared), created at its first use.
+  const Pipeline& pipeline(size_t program) {
+    if (pipelines[program].pipeline) return pipelines[program];
+    const IntersectionProgram& prog = kPrograms[program];
+    // Built aside and stored whole: a failure half-way leaves no half-made pipeline to reuse.
+    Pipeline P;
+    const StageCode code[5] = {{kRgen, sizeof kRgen},
+                               {kMiss, sizeof kMiss},
+                               {prog.code, prog.bytes},
+                               {kPrismHit, sizeof kPrismHit},
+                               {kTriangleHit, sizeof kTriangleHit}};
+    P.pipeline = createPipeline(code, 0);
 
     // Shader binding table: raygen | miss | two hit groups, each region base-aligned.
     const VkDeviceSize hs = rt.shaderGroupHandleSize;
@@ -785,6 +837,104 @@ Runner::~Runner() = default;
 
 DeviceHold::DeviceHold() : device_(sharedDevice()) {}
 DeviceHold::~DeviceHold() = default;
+
+namespace {
+
+// NAME.spv from dir as 32-bit words, or one error line naming the file.
+std::vector<uint32_t> readSpirv(const std::string& dir, const std::string& name) {
+  const std::string path = dir + "/" + name + ".spv";
+  std::ifstream f(path, std::ios::binary);
+  if (!f) fail(path, "cannot open the SPIR-V module");
+  const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (f.bad()) fail(path, "read failed");
+  std::vector<uint32_t> words(bytes.size() / 4);
+  std::memcpy(words.data(), bytes.data(), words.size() * 4);
+  if (bytes.size() < 20 || bytes.size() % 4 != 0 || words[0] != 0x07230203u)
+    fail(path, "not a SPIR-V module ({} bytes{})", bytes.size(),
+         bytes.size() >= 4 && words[0] != 0x07230203u ? ", no SPIR-V magic number" : "");
+  return words;
+}
+
+// The shader stages of VkShaderStageFlags, by name.
+std::string stageNames(uint32_t stages) {
+  const std::pair<uint32_t, const char*> names[] = {
+      {VK_SHADER_STAGE_RAYGEN_BIT_KHR, "raygen"},       {VK_SHADER_STAGE_MISS_BIT_KHR, "miss"},
+      {VK_SHADER_STAGE_INTERSECTION_BIT_KHR, "intersection"}, {VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, "closest hit"},
+      {VK_SHADER_STAGE_ANY_HIT_BIT_KHR, "any hit"},      {VK_SHADER_STAGE_CALLABLE_BIT_KHR, "callable"},
+      {VK_SHADER_STAGE_COMPUTE_BIT, "compute"}};
+  std::string out;
+  for (const auto& [bit, name] : names)
+    if (stages & bit) {
+      if (!out.empty()) out += '+';
+      out += name;
+    }
+  return out.empty() ? fmt::format("0x{:x}", stages) : out;
+}
+
+double statisticValue(const VkPipelineExecutableStatisticKHR& s) {
+  switch (s.format) {
+    case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_BOOL32_KHR: return s.value.b32 ? 1.0 : 0.0;
+    case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_INT64_KHR: return double(s.value.i64);
+    case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_UINT64_KHR: return double(s.value.u64);
+    case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_FLOAT64_KHR: return s.value.f64;
+    default: return 0.0;
+  }
+}
+
+}  // namespace
+
+PipelineStatistics pipelineStatistics(const std::string& spirvDir) {
+  Device D(true);
+  PipelineStatistics out;
+  out.device = D.props.deviceName;
+  out.driver = D.driverInfo;
+  out.supported = D.executableInfo;
+  std::vector<uint32_t> files[5];
+  if (!spirvDir.empty())
+    for (int i = 0; i < 5; ++i)
+      if (kStageFiles[i]) files[i] = readSpirv(spirvDir, kStageFiles[i]);
+  const StageCode built[5] = {{kRgen, sizeof kRgen}, {kMiss, sizeof kMiss}, {nullptr, 0},
+                              {kPrismHit, sizeof kPrismHit}, {kTriangleHit, sizeof kTriangleHit}};
+  for (const IntersectionProgram& prog : kPrograms) {
+    StageCode code[5];
+    std::vector<uint32_t> own;
+    if (!spirvDir.empty()) own = readSpirv(spirvDir, prog.stage);
+    for (int i = 0; i < 5; ++i) {
+      const std::vector<uint32_t>& w = i == 2 ? own : files[i];
+      code[i] = spirvDir.empty() ? (i == 2 ? StageCode{prog.code, prog.bytes} : built[i])
+                                 : StageCode{w.data(), w.size() * sizeof(uint32_t)};
+    }
+    const VkPipeline pipe =
+        D.createPipeline(code, D.executableInfo ? VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR : 0);
+    PipelineProgram P;
+    P.method = prog.name;
+    P.stage = prog.stage;
+    if (D.executableInfo) {
+      VkPipelineInfoKHR pi{VK_STRUCTURE_TYPE_PIPELINE_INFO_KHR};
+      pi.pipeline = pipe;
+      uint32_t ne = 0;
+      check(D.executableProps(D.device, &pi, &ne, nullptr), "vkGetPipelineExecutablePropertiesKHR");
+      std::vector<VkPipelineExecutablePropertiesKHR> exe(ne, {VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_PROPERTIES_KHR});
+      check(D.executableProps(D.device, &pi, &ne, exe.data()), "vkGetPipelineExecutablePropertiesKHR");
+      for (uint32_t e = 0; e < ne; ++e) {
+        PipelineExecutable X{exe[e].name, exe[e].description, stageNames(exe[e].stages), exe[e].subgroupSize, {}};
+        VkPipelineExecutableInfoKHR ei{VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_INFO_KHR};
+        ei.pipeline = pipe;
+        ei.executableIndex = e;
+        uint32_t ns = 0;
+        check(D.executableStats(D.device, &ei, &ns, nullptr), "vkGetPipelineExecutableStatisticsKHR");
+        std::vector<VkPipelineExecutableStatisticKHR> st(ns, {VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_STATISTIC_KHR});
+        check(D.executableStats(D.device, &ei, &ns, st.data()), "vkGetPipelineExecutableStatisticsKHR");
+        for (const VkPipelineExecutableStatisticKHR& s : st)
+          X.statistics.push_back({s.name, s.description, statisticValue(s)});
+        P.executables.push_back(std::move(X));
+      }
+    }
+    vkDestroyPipeline(D.device, pipe, nullptr);
+    out.programs.push_back(std::move(P));
+  }
+  return out;
+}
 
 std::string Runner::deviceName() const { return scene_->dev->props.deviceName; }
 std::string Runner::driverInfo() const { return scene_->dev->driverInfo; }

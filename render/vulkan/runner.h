@@ -32,6 +32,37 @@ class DeviceHold {
   std::shared_ptr<Device> device_;
 };
 
+// The driver's own account of the ray-tracing pipelines (VK_KHR_pipeline_executable_
+// properties): per intersection program, each executable the driver compiled (a stage, or
+// stages merged) with its statistics as the driver names them (on NVIDIA: registers,
+// binary size, local memory, ...). Where the device lacks the extension, supported is
+// false and the programs list no executables (their pipelines are still created).
+struct PipelineStatistic {
+  std::string name, description;
+  double value = 0;  // booleans as 0 or 1
+};
+struct PipelineExecutable {
+  std::string name, description;
+  std::string stages;  // "intersection", "raygen+miss", ...
+  uint32_t subgroupSize = 0;
+  std::vector<PipelineStatistic> statistics;
+};
+struct PipelineProgram {
+  std::string method, stage;  // "canonical", "prism.rint"
+  std::vector<PipelineExecutable> executables;
+};
+struct PipelineStatistics {
+  std::string device, driver;
+  bool supported = false;
+  std::vector<PipelineProgram> programs;
+};
+// Creates a device of its own (with the extension, where the device has it), compiles the
+// pipeline of every intersection program with statistics captured and returns them. The
+// SPIR-V is the build's, or, where spirvDir is not empty, that folder's STAGE.spv files
+// (another commit's shaders, with the same descriptor bindings and push constants).
+// Throws oblong::Error with one line as Runner does, or naming an unreadable module.
+PipelineStatistics pipelineStatistics(const std::string& spirvDir = "");
+
 class Runner {
  public:
   // Takes the records (the large arrays are freed once on the device), on the process's
