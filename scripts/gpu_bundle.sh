@@ -19,8 +19,8 @@
 # them with xz and tar, else python3; 0: uncompressed), OBLONG_BUNDLE_GLIBC (1, the
 # default: this machine's glibc, ~3 MiB, for a GPU machine with an older one; 0: not),
 # OBLONG_BUNDLE_BASELINE (a commit whose shaders run.sh compiles into pipelines beside the
-# build's, for the driver's statistics before and after: default 5cac6cc, where the
-# GPU-first work began; empty: none).
+# build's, for the driver's statistics before and after: default 5cac6cc, whose
+# shaders are those of experiments/GPU.md's H200 run; empty: none).
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
