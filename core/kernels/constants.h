@@ -89,10 +89,10 @@
 // Cell indices are clamped to ±this before the conversion to int (snapCells).
 #define OBLONG_TRAV_SNAP_LIMIT 1e9
 
-// minorAt: an end point of the marched piece counts for a column line c when |c − uv| <=
-// pad · REL + ABS (its pad, widened by its own rounding).
-#define OBLONG_TRAV_END_PAD_REL 1.0000001
-#define OBLONG_TRAV_END_PAD_ABS 1e-12
+// The march's interval test (mayCross): ψ may vanish where |ψ| is within its variation
+// plus this times the magnitude of its terms (quadraticRoots allows the coefficients a
+// relative rounding of 1e-13 and pads its roots by 4 times its effect).
+#define OBLONG_TRAV_PSI_ERR 5e-13
 
 // pieceEnd: a piece is marched when the end points' pads exceed this fraction of the
 // rectangle's longer side ("pads dominate": splitting cannot shrink it any further).

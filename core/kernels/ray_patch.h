@@ -15,8 +15,8 @@
 //      clipped to that box, the piece is optionally tightened by re-projecting the clipped
 //      ends (Fig. 5a, "inversion during traversal"), and the splitter cuts it in two.
 //   4. Texel marching (§4.4): the cells within ε of the monotone piece, column by column
-//      along its major axis, front to back; ψ's crossing with each column's sides gives the
-//      rows to test.
+//      along its major axis, front to back, by a walk whose every cell is decided by an
+//      interval test of ψ over the cell dilated by ε.
 //   5. Every hit updates the closest hit; pieces starting beyond it are skipped.
 // Wherever the curve machinery cannot vouch for a piece (ill-posed triangle, failed
 // inversion, failed split), that part falls back to projection-free box subdivision of
@@ -151,11 +151,6 @@ OBLONG_INLINE dvec2 pieceHi(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) { 
 OBLONG_INLINE bool strictlyBetween(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, int axis, double c) {
   double x0 = min(a.uv[axis], b.uv[axis]), x1 = max(a.uv[axis], b.uv[axis]);
   return c > x0 && c < x1;
-}
-
-// An endpoint whose major coordinate may be c (within its pad).
-OBLONG_INLINE bool atEnd(OBLONG_IN(CurvePoint) e, int ax, double c) {
-  return abs(c - e.uv[ax]) <= e.pad[ax] * OBLONG_TRAV_END_PAD_REL + OBLONG_TRAV_END_PAD_ABS;
 }
 
 OBLONG_KERNELS_END

@@ -205,14 +205,18 @@ void pushBox(OBLONG_IN(ivec2) lo, OBLONG_IN(ivec2) hi, double ta, double tb) {
 }
 bool isBox(OBLONG_IN(RpEntry) e) { return e.a.pad.x == OBLONG_RP_BOX_ENTRY; }
 
-// Local cells touching [lo, hi], clipped to T's cells. False when empty.
-bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
+// Local cells touching [lo, hi] (snapRect), clipped to T's cells (snapCells: false when
+// empty).
+void snapRect(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
   double lim = OBLONG_TRAV_SNAP_LIMIT;
   for (int k = 0; k < 2; ++k) {
     OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(lo[k]) + abs(hi[k]));
     clo[k] = int(clamp(floor(lo[k] - eta), -lim, lim));
     chi[k] = int(clamp(floor(hi[k] + eta), -lim, lim));
   }
+}
+bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
+  snapRect(lo, hi, clo, chi);
   clo = max(clo, g_cellLo);
   chi = min(chi, g_cellHi);
   return clo.x <= chi.x && clo.y <= chi.y;
@@ -220,18 +224,28 @@ bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, 
 
 // ---- the cells to test: one generator ----------------------------------------------------
 // Mode 1: a cell range, front to back along the approximate direction; mode 2: texel
-// marching of a piece (§4.4), column by column along its major axis.
+// marching of a piece (§4.4) by a walk over the cells it may cross, column by column along
+// its major axis.
 int g_gen;
 ivec2 g_gLo, g_gHi;
 int g_gi, g_gj, g_gsx, g_gsy;
 CurvePoint g_ma, g_mb;
 int g_mAx, g_mSa, g_mSm, g_mK, g_mJ, g_mJ0, g_mJ1;
 bool g_mCol;
-// Where a column's minor range cannot narrow its rows, its two solves are skipped (the
-// cells tested stay the same): every row any column could get is one row (g_mOneRow), or
-// the column spans the whole piece and one endpoint is at each end (g_mEnds), when the
-// two ranges join to the piece's minor range.
-bool g_mOneRow, g_mEnds;
+// The walk: a cell is reached when the interval test (mayCross) says the piece may cross
+// it dilated by ε, and it is in its column's seeds — the rows reached in the column
+// before (g_mPLo..g_mPHi), the rows of the start block (the cells within ε of the first
+// end's pad box, g_mSLo..g_mSHi) in its columns, or every row where the piece's direction
+// is uncertain (g_mAll) — or right after a reached row (g_mRun). The piece is monotone, so
+// every cell it crosses is reached from the start block by steps along its major and minor
+// directions through cells it crosses; other branches of ψ = 0 only add cells. The walk
+// runs over the piece's rectangle unclamped (g_mRLo..g_mRHi: a piece may start outside T's
+// cells) and returns the cells within T's (g_gLo..g_gHi). g_mEta: the snap's rounding
+// allowance over the rectangle.
+ivec2 g_mRLo, g_mRHi, g_mSLo, g_mSHi;
+int g_mPLo, g_mPHi, g_mCLo, g_mCHi;
+bool g_mAll, g_mRun;
+dvec2 g_mEta;
 // The march's stop: once a hit is known, cells past the curve's point at the best hit's
 // limit t* cannot hold a better one (the piece is monotone, so its points before t* lie on
 // this side of that point's padded coordinates, and every hit lies within ε of its cell).
@@ -255,8 +269,9 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_LEAF);
   OBLONG_PRECISE dvec2 d = b.uv - a.uv;
   int ax = abs(d.x) >= abs(d.y) ? 0 : 1, mi = 1 - ax;
+  dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
   ivec2 clo, chi;
-  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  if (!snapCells(lo - g_eps, hi + g_eps, clo, chi)) return;
   g_gen = 2;
   g_ma = a;
   g_mb = b;
@@ -265,14 +280,19 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   g_gHi = chi;
   g_mSa = d[ax] >= 0.0 ? 1 : -1;
   g_mSm = d[mi] >= 0.0 ? 1 : -1;
-  g_mK = g_mSa > 0 ? clo[ax] : chi[ax];
-  g_mCol = false;
-  dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
-  OBLONG_PRECISE double mLo = lo[mi] - g_eps[mi], mHi = hi[mi] + g_eps[mi];
-  OBLONG_PRECISE double etaMax = 2.0 * OBLONG_TRAV_SNAP_ETA * (1.0 + 2.0 * max(abs(mLo), abs(mHi)));
-  g_mOneRow = floor(mLo - etaMax) == floor(mHi + etaMax);
-  g_mEnds = (atEnd(a, ax, lo[ax]) && atEnd(b, ax, hi[ax])) || (atEnd(b, ax, lo[ax]) && atEnd(a, ax, hi[ax]));
   for (int k = 0; k < 2; ++k) g_mCertain[k] = abs(d[k]) > a.pad[k] + b.pad[k];
+  g_mAll = !g_mCertain.x || !g_mCertain.y;
+  snapRect(lo - g_eps, hi + g_eps, g_mRLo, g_mRHi);
+  snapRect(a.uv - a.pad - g_eps, a.uv + a.pad + g_eps, g_mSLo, g_mSHi);
+  for (int k = 0; k < 2; ++k) {
+    OBLONG_PRECISE double m = max(abs(lo[k] - g_eps[k]), abs(hi[k] + g_eps[k]));
+    OBLONG_PRECISE double eta = 2.0 * OBLONG_TRAV_SNAP_ETA * (2.0 + 2.0 * m);
+    g_mEta[k] = eta;
+  }
+  g_mK = g_mAll ? (g_mSa > 0 ? g_mRLo[ax] : g_mRHi[ax]) : (g_mSa > 0 ? g_mSLo[ax] : g_mSHi[ax]);
+  g_mPLo = 1;  // no row reached yet
+  g_mPHi = 0;
+  g_mCol = false;
   g_mStopSet = !g_mCertain.x && !g_mCertain.y;
   g_mStopAxis = bvec2(false, false);
   g_mStop = dvec2(0.0);
@@ -302,39 +322,37 @@ bool pastStop(int a, int k) {
   return g_mStopAxis[a] && (sg > 0 ? double(k) - g_eps[a] > g_mStop[a] : double(k + 1) + g_eps[a] < g_mStop[a]);
 }
 
-// The minor coordinate range of the marched piece where its major coordinate is c.
-void minorAt(double c, OBLONG_OUT(double) wlo, OBLONG_OUT(double) whi) {
-  int ax = g_mAx, mi = 1 - ax;
-  dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
-  wlo = kInfD;
-  whi = -kInfD;
-  // An endpoint whose major coordinate may be c: the sub-arc may start or end there.
-  for (int k = 0; k < 2; ++k) {
-    CurvePoint e = k == 0 ? g_ma : g_mb;
-    if (atEnd(e, ax, c)) {
-      wlo = min(wlo, e.uv[mi] - e.pad[mi]);
-      whi = max(whi, e.uv[mi] + e.pad[mi]);
-    }
+// The interval test of the walk: may the piece cross cell (k, j) (major, minor) dilated by
+// ε and η? The dilated cell, clipped to the piece's rectangle, meets an end's pad box, or ψ
+// may vanish on it: |ψ| at its centre against ψ's variation over it (gradient and
+// second-order terms: exact for a quadratic) plus ψ's error (OBLONG_TRAV_PSI_ERR of its
+// terms' magnitude, the coefficients' rounding that quadraticRoots allows, with margin).
+bool mayCross(int k, int j) {
+  int ax = g_mAx;
+  dvec2 plo = pieceLo(g_ma, g_mb), phi = pieceHi(g_ma, g_mb);
+  ivec2 c = ax == 0 ? ivec2(k, j) : ivec2(j, k);
+  dvec2 lo, hi;
+  for (int a = 0; a < 2; ++a) {
+    OBLONG_PRECISE double l = double(c[a]) - g_eps[a] - g_mEta[a], h = double(c[a] + 1) + g_eps[a] + g_mEta[a];
+    lo[a] = max(l, plo[a]);
+    hi[a] = min(h, phi[a]);
   }
-  double q2, q1, q0, w[2], rp[2];
-  psiOnLine(g_psi, ax, c, q2, q1, q0);
-  int n = quadraticRoots(q2, q1, q0, w, rp);
-  if (n < 0) {  // ψ vanishes on the whole line: the curve may run along it
-    wlo = lo[mi];
-    whi = hi[mi];
-    return;
+  if (!(lo.x <= hi.x && lo.y <= hi.y)) return false;
+  for (int e = 0; e < 2; ++e) {
+    CurvePoint p = e == 0 ? g_ma : g_mb;
+    OBLONG_PRECISE dvec2 elo = p.uv - p.pad, ehi = p.uv + p.pad;
+    if (lo.x <= ehi.x && lo.y <= ehi.y && elo.x <= hi.x && elo.y <= hi.y) return true;
   }
-  for (int k = 0; k < n; ++k)
-    if (w[k] >= lo[mi] - rp[k] && w[k] <= hi[mi] + rp[k]) {
-      wlo = min(wlo, w[k] - rp[k]);
-      whi = max(whi, w[k] + rp[k]);
-    }
-  if (!(wlo <= whi)) {  // lost to rounding: the whole range
-    wlo = lo[mi];
-    whi = hi[mi];
-  }
-  wlo = max(wlo, lo[mi]);
-  whi = min(whi, hi[mi]);
+  OBLONG_PRECISE dvec2 m = 0.5 * (lo + hi), r = 0.5 * (hi - lo);
+  double v = psiEval(g_psi, m);
+  dvec2 g = psiGrad(g_psi, m);
+  OBLONG_PRECISE double var = abs(g.x) * r.x + abs(g.y) * r.y + abs(g_psi.cXX) * r.x * r.x +
+                              abs(g_psi.cXY) * r.x * r.y + abs(g_psi.cYY) * r.y * r.y;
+  OBLONG_PRECISE dvec2 M = max(abs(lo), abs(hi));
+  OBLONG_PRECISE double mag = abs(g_psi.c0) + abs(g_psi.cX) * M.x + abs(g_psi.cY) * M.y + abs(g_psi.cXX) * M.x * M.x +
+                              abs(g_psi.cXY) * M.x * M.y + abs(g_psi.cYY) * M.y * M.y;
+  OBLONG_PRECISE double bound = var + OBLONG_TRAV_PSI_ERR * mag;
+  return abs(v) <= bound;
 }
 
 // The next cell of the current generator; false when it is exhausted.
@@ -354,13 +372,7 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
   }
   int ax = g_mAx, mi = 1 - ax;
   for (;;) {
-    // The end of the march, or of the current column.
-    if (!g_mCol && (g_mSa > 0 ? g_mK > g_gHi[ax] : g_mK < g_gLo[ax])) return false;
-    if (g_mCol && !(g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0)) {
-      g_mCol = false;
-      g_mK += g_mSa;
-      continue;
-    }
+    if (!g_mCol && (g_mSa > 0 ? g_mK > g_mRHi[ax] : g_mK < g_mRLo[ax])) return false;
     // The first hit found bounds the march (setStop, from this one call site).
     if (!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) {
       OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
@@ -371,44 +383,44 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
         OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
         return false;
       }
-      // The piece's points whose major coordinate is within ε of column k.
-      dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
-      OBLONG_PRECISE double c0 = max(double(g_mK) - g_eps[ax], lo[ax]), c1 = min(double(g_mK + 1) + g_eps[ax], hi[ax]);
-      if (c0 > c1) {
-        g_mK += g_mSa;
-        continue;
+      // The column's seeds; none: no cell of the piece is left.
+      int lo = g_mPLo, hi = g_mPHi;
+      if (g_mK >= g_mSLo[ax] && g_mK <= g_mSHi[ax]) {
+        lo = lo <= hi ? min(lo, g_mSLo[mi]) : g_mSLo[mi];
+        hi = max(hi, g_mSHi[mi]);
       }
-      double r[4];
-      if (g_mOneRow || (g_mEnds && c0 == lo[ax] && c1 == hi[ax])) {
-        r[0] = lo[mi];
-        r[1] = hi[mi];
-        r[2] = lo[mi];
-        r[3] = hi[mi];
-      } else {
-        for (int k = 0; k < 2; ++k) minorAt(k == 0 ? c0 : c1, r[2 * k], r[2 * k + 1]);
+      if (g_mAll) {
+        lo = g_mRLo[mi];
+        hi = g_mRHi[mi];
       }
-      // Monotone: in between, the minor coordinate lies between its values at c0 and c1.
-      OBLONG_PRECISE double wlo = min(r[0], r[2]) - g_eps[mi], whi = max(r[1], r[3]) + g_eps[mi];
-      OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(wlo) + abs(whi));
-      g_mJ0 = max(int(floor(wlo - eta)), g_gLo[mi]);
-      g_mJ1 = min(int(floor(whi + eta)), g_gHi[mi]);
-      g_mJ = g_mSm > 0 ? g_mJ0 : g_mJ1;
+      if (lo > hi) return false;
+      g_mJ0 = lo;
+      g_mJ1 = hi;
+      g_mJ = g_mSm > 0 ? lo : hi;
+      g_mRun = false;
+      g_mCLo = 1;
+      g_mCHi = 0;
       g_mCol = true;
-      if (!(g_mSm > 0 ? g_mJ <= g_mJ1 : g_mJ >= g_mJ0)) {  // no cell in this column
-        g_mCol = false;
-        g_mK += g_mSa;
-        continue;
-      }
     }
-    if (pastStop(mi, g_mJ)) {
-      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+    // The column goes on within its seeds, or right after a reached row.
+    bool stop = pastStop(mi, g_mJ);
+    if (stop) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+    if (stop || g_mJ < g_mRLo[mi] || g_mJ > g_mRHi[mi] || !(g_mRun || (g_mJ >= g_mJ0 && g_mJ <= g_mJ1))) {
+      g_mPLo = g_mCLo;
+      g_mPHi = g_mCHi;
       g_mCol = false;
       g_mK += g_mSa;
       continue;
     }
-    ci = ax == 0 ? g_mK : g_mJ;
-    cj = ax == 0 ? g_mJ : g_mK;
+    int j = g_mJ;
     g_mJ += g_mSm;
+    g_mRun = mayCross(g_mK, j);
+    if (!g_mRun) continue;
+    g_mCLo = g_mCLo <= g_mCHi ? min(g_mCLo, j) : j;
+    g_mCHi = max(g_mCHi, j);
+    ci = ax == 0 ? g_mK : j;
+    cj = ax == 0 ? j : g_mK;
+    if (ci < g_gLo.x || ci > g_gHi.x || cj < g_gLo.y || cj > g_gHi.y) continue;  // outside T's cells
     return true;
   }
   return false;
