@@ -36,7 +36,7 @@ float minInterpolatedNormalLength(const vec3& n0, const vec3& n1, const vec3& n2
 
 // A float >= 1/m for every m that rounds to the float mf (minInterpolatedNormalLength's
 // result is rounded to nearest): 1/mf with a relative margin of 2^-20, rounded up. The
-// boxes multiply by it (shared::boxOverRect) instead of dividing by |N|.
+// boxes multiply by it (core/kernels/rect_bounds.h, boxFrameF's invM) instead of dividing by |N|.
 float invNormalLengthBound(float mf);
 
 }  // namespace oblong

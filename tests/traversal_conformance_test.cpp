@@ -12,7 +12,6 @@
 #include "traversal/intersector.h"
 #include "traversal/prism.h"
 #include "traversal/psi.h"
-#include "traversal/rect_bounds.h"
 #include "traversal/traversal.h"
 #include "strategies/quadtree.h"
 #include "strategies/splitter.h"

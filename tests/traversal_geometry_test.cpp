@@ -1,6 +1,6 @@
 // The traversal's geometry (docs/design.md invariants 2, 5): the allocation-free MicroCells
 // against forEachMicroTriangle, the prism and the shell analysis against the
-// micro-geometry, ψ's monotone split, and the box over a snapped rectangle.
+// micro-geometry, ψ's monotone split, and the float box over a snapped rectangle.
 #include "core/microgeometry.h"
 #include "core/procedural.h"
 #include "core/stats.h"
@@ -9,7 +9,6 @@
 #include "traversal/intersector.h"
 #include "traversal/prism.h"
 #include "traversal/psi.h"
-#include "traversal/rect_bounds.h"
 #include "traversal/texture_frame.h"
 #include "traversal/traversal.h"
 #include "strategies/quadtree.h"
@@ -216,33 +215,6 @@ CellRect randomCellRect(std::mt19937& rng, const CellRange& cr, const Displaceme
 
 }  // namespace
 
-TEST_CASE("the box over a snapped rectangle holds its cells' micro-triangles", "[traversal][prism][unit]") {
-  std::mt19937 rng(7);
-  for (const Scenario& s : {coarseTorus(), sphere()}) {
-    const float delta = maxCellDelta(*s.disp.map);
-    for (size_t k = 0; k < s.tris.size(); k += 5) {
-      const DisplacedTriangle& T = s.tris[k];
-      const LocalFrame F = LocalFrame::make(T, s.disp);
-      const CellRange cr = cellsOverlapping(T, s.disp);
-      const PrismParams P = shellOf(T, s.disp, delta);
-      for (int q = 0; q < 20; ++q) {
-        const CellRect r = randomCellRect(rng, cr, s.disp, T, F);
-        const int x0 = r.cells.x0, x1 = r.cells.x1, y0 = r.cells.y0, y1 = r.cells.y1;
-        const BoxD box = boxOverRect(F, invNormalLengthBound(T.minNormalLength), r.lo, r.hi, r.h.lo, r.h.hi, P.vertexErr);
-        forEachMicroTriangle(T, s.disp, CellRange{x0, y0, x1, y1}, [&](const MicroTriangle& m) {
-          for (const auto& v : m.v) {
-            const dvec3 p(v.p);
-            INFO(s.name << " triangle " << k << " cells " << x0 << ".." << x1 << " x " << y0 << ".." << y1);
-            CHECK((p.x >= box.lo.x && p.y >= box.lo.y && p.z >= box.lo.z && p.x <= box.hi.x && p.y <= box.hi.y &&
-                   p.z <= box.hi.z));
-          }
-        });
-      }
-    }
-  }
-}
-
-
 TEST_CASE("the float box holds its cells' micro-vertices, and its slab test the rays through them",
           "[traversal][prism][unit]") {
   // boxOverRectF and clipBoxF (core/kernels/rect_bounds.h) as both traversals call them:
@@ -356,7 +328,7 @@ TEST_CASE("the float box and slab test cover their own rounding where the box is
 
 TEST_CASE("a triangle's 1/|N| bound holds for every m its float rounds from", "[traversal][prism][unit]") {
   // minInterpolatedNormalLength rounds to nearest: the true minimum lies within half an
-  // ulp of the float, and boxOverRect multiplies by invNormalLengthBound(m) instead of dividing.
+  // ulp of the float, and the boxes (boxFrameF's invM) multiply by invNormalLengthBound(m) instead of dividing.
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> M(1e-6f, 1.0f);
   for (int q = 0; q < 100000; ++q) {

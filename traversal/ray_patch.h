@@ -13,7 +13,7 @@
 #include "core/kernels/ray_patch.h"
 #include "traversal/prism.h"
 #include "traversal/psi.h"
-#include "traversal/rect_bounds.h"
+#include "core/kernels/rect_bounds.h"
 #include "traversal/traversal_mesh.h"
 #include "strategies/range_query.h"
 #include "strategies/splitter.h"

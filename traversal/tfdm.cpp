@@ -27,7 +27,7 @@
 #include "core/stats.h"
 #include "strategies/quantize.h"
 #include "traversal/closest_hit.h"
-#include "traversal/rect_bounds.h"
+#include "core/kernels/rect_bounds.h"
 #include "traversal/texture_frame.h"
 
 #include <fmt/format.h>

@@ -1,7 +1,7 @@
 // Conservative world box of the micro-geometry over a uv rectangle (docs/design.md
 // invariant 2; RMIP Alg. 1 line 12, "surface bounds(triangle, bound, rmip)"), and the
-// ray's slab test against it; written once for the CPU (traversal/rect_bounds.h) and the
-// Vulkan shaders, in the subset of core/kernels/lang.h.
+// ray's slab test against it; written once for the CPU (traversal/ray_patch.h,
+// traversal/tfdm.cpp) and the Vulkan shaders, in the subset of core/kernels/lang.h.
 //
 // The caller passes the rectangle already snapped outward to whole grid cells (the
 // micro-triangles touching a rectangle reach one texel beyond it) and clipped to T's uv
@@ -20,46 +20,17 @@
 // only by about h·(1/m - 1/min over the rectangle of |N|) along N: nothing where T's
 // normals are parallel (m = 1), little on a finely tessellated curved mesh (m near 1).
 //
-// Precision: boxOverRect computes in double and pads explicitly by `pad` (the float error
-// of the micro-vertices plus the ray test's own rounding) and by its own rounding. The
-// traversals' per-step boxes use the float form below (boxOverRectF, clipBoxF): the same
-// interval arithmetic in float, relative to an anchor near T, with a rigorous pad for
-// float rounding whose scales are T's, computed once per triangle (boxFrameF).
+// Precision: the boxes are float (boxOverRectF, clipBoxF below): this interval arithmetic
+// relative to an anchor near T, padded by the micro-vertices' own float error, the ray
+// test's rounding and a rigorous bound on the box's own rounding, whose scales are T's,
+// computed once per triangle (boxFrameF). clipBox is the slab test in double for the
+// prism's boxes at a ray's set-up.
 #ifndef OBLONG_KERNELS_RECT_BOUNDS_H
 #define OBLONG_KERNELS_RECT_BOUNDS_H
 
 #include "core/kernels/lang.h"
 
 OBLONG_KERNELS_BEGIN
-
-OBLONG_INLINE void boxOverRect(OBLONG_IN(dvec3) Pc, OBLONG_IN(dvec3) PX, OBLONG_IN(dvec3) PY, OBLONG_IN(dvec3) Nc,
-                               OBLONG_IN(dvec3) NX, OBLONG_IN(dvec3) NY, double invM, OBLONG_IN(dvec2) lo,
-                               OBLONG_IN(dvec2) hi, double hlo, double hhi, double pad, OBLONG_OUT(dvec3) blo,
-                               OBLONG_OUT(dvec3) bhi) {
-  OBLONG_PRECISE dvec3 Nlo, Nhi;
-  for (int k = 0; k < 3; ++k) {
-    OBLONG_PRECISE double px0 = PX[k] * lo.x, px1 = PX[k] * hi.x, py0 = PY[k] * lo.y, py1 = PY[k] * hi.y;
-    blo[k] = Pc[k] + min(px0, px1) + min(py0, py1);
-    bhi[k] = Pc[k] + max(px0, px1) + max(py0, py1);
-    OBLONG_PRECISE double nx0 = NX[k] * lo.x, nx1 = NX[k] * hi.x, ny0 = NY[k] * lo.y, ny1 = NY[k] * hi.y;
-    Nlo[k] = Nc[k] + min(nx0, nx1) + min(ny0, ny1);
-    Nhi[k] = Nc[k] + max(nx0, nx1) + max(ny0, ny1);
-  }
-  // k = h/|N|, |N| in [m, 1] (1 + 1e-12: unit normals' rounding); invM's margin covers
-  // the products' rounding.
-  OBLONG_PRECISE double klo = hlo < 0.0 ? hlo * invM : hlo * (1.0 - 1e-12);
-  OBLONG_PRECISE double khi = hhi > 0.0 ? hhi * invM : hhi * (1.0 - 1e-12);
-  for (int k = 0; k < 3; ++k) {
-    OBLONG_PRECISE double a = klo * Nlo[k], b = klo * Nhi[k], c = khi * Nlo[k], d = khi * Nhi[k];
-    blo[k] += min(min(a, b), min(c, d));
-    bhi[k] += max(max(a, b), max(c, d));
-  }
-  OBLONG_PRECISE double mag =
-      max(max(max(abs(blo.x), abs(blo.y)), max(abs(blo.z), abs(bhi.x))), max(abs(bhi.y), abs(bhi.z)));
-  OBLONG_PRECISE double p = pad + 1e-14 * mag;  // plus double rounding of the above
-  blo -= dvec3(p);
-  bhi += dvec3(p);
-}
 
 // Slab test in double: [t0, t1] ∩ the ray's parameters inside [lo, hi] (t0 > t1 when
 // missed); invD = 1 / D, infinite along an axis the ray is parallel to.
