@@ -23,6 +23,7 @@
 #include <cstring>
 #include <numbers>
 #include <random>
+#include <set>
 
 using namespace oblong;
 using namespace oblong::test;
@@ -341,4 +342,117 @@ TEST_CASE("a triangle's 1/|N| bound holds for every m its float rounds from", "[
     // and it stays tight: within 2^-19 of 1/m
     REQUIRE(static_cast<double>(inv) * static_cast<double>(mf) <= 1.0 + 0x1p-19);
   }
+}
+
+namespace {
+
+// The driver with hooks that the march reaches with no hit found: only the statistics
+// and "no hit yet" are ever called; the others are instantiated with the march's stop.
+struct MarchOnly : shared::RayPatchLoop<MarchOnly> {
+  void rpStat(int) {}
+  bool rpHitFound() { return false; }
+  float rpHitT() { return 0.0f; }
+  dvec2 rpHitUV() { return dvec2(0.0); }
+  dvec2 rpToSample(const dvec2& uv) { return uv; }
+  void rpInvert(const vec3&, vec2& b, float& h) {
+    b = vec2(0.0f);
+    h = 0.0f;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the march's walk reaches every cell within eps of its piece", "[traversal][unit]") {
+  // Random monotone arcs of conics ψ = α·(w + γw² − c·(x − x0)²), w = y − y0 − s·(x − x0)
+  // (x², xy, y² terms, a second branch at w ≈ −1/γ), anywhere up to 10^5 cells from the
+  // origin, either axis major, either direction, with ε from 10^-3 to 2 cells and end
+  // pads from 10^-12 to a quarter cell (plus the snap's allowance, as makePoint's); every cell whose ε-dilated square holds a point of
+  // the arc (2 000 points along it, in long double) must be among the walk's cells.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  auto logU = [&](double lo, double hi) { return lo * std::pow(hi / lo, U(rng)); };
+  int pieces = 0, cellsChecked = 0, floatForm = 0;
+  size_t walked = 0;
+  for (int q = 0; q < 4000; ++q) {
+    const long double x0 = (U(rng) - 0.5) * 2.0 * logU(1.0, 1e5), y0 = (U(rng) - 0.5) * 2.0 * logU(1.0, 1e5);
+    const long double s = (U(rng) - 0.5) * 2.0 * logU(1e-3, 1.0);
+    const long double c = (U(rng) - 0.5) * 2.0 * logU(1e-6, 1e-1), g = (U(rng) - 0.5) * 2.0 * logU(1e-6, 1.0);
+    const long double alpha = (U(rng) < 0.5 ? -1.0 : 1.0) * logU(1e-6, 1e6);
+    const double len = logU(1e-3, 8.0), eps = logU(1e-3, 2.0), pad = logU(1e-12, 0.25);
+    const bool swap = U(rng) < 0.5, back = U(rng) < 0.5;
+    // The arc over x in [x0 + a0, x0 + a0 + len] (the branch through w = 0 at x0).
+    const long double a0 = (U(rng) - 0.5) * 4.0;
+    auto wAt = [&](long double dx) {  // the root of γw² + w − c·dx² near 0
+      const long double r = c * dx * dx;
+      return std::abs(g * r) < 1e-12L ? r - g * r * r : (-1.0L + std::sqrt(1.0L + 4.0L * g * r)) / (2.0L * g);
+    };
+    auto point = [&](long double dx) { return std::pair<long double, long double>(x0 + dx, y0 + s * dx + wAt(dx)); };
+    // Monotone and on the branch (1 + 4γc·dx² > 0) over the arc, else skipped.
+    bool ok = true;
+    long double prevY = point(a0).second;
+    int sign = 0;
+    for (int k = 1; k <= 64 && ok; ++k) {
+      const long double dx = a0 + len * k / 64.0L;
+      ok = 1.0L + 4.0L * g * c * dx * dx > 1e-6L;
+      const long double y = point(dx).second;
+      const int sg = y > prevY ? 1 : y < prevY ? -1 : 0;
+      if (sg != 0 && sign != 0 && sg != sign) ok = false;
+      if (sg != 0) sign = sg;
+      prevY = y;
+    }
+    if (!ok) continue;
+    // ψ in (X, Y) = swap ? (y, x) : (x, y), expanded about the origin, in double.
+    // ψ = α(w + γw² − c·dx²), dx = x − x0, w = y − y0 − s·dx.
+    const long double k0 = -y0 + s * x0;  // w = y − s·x + k0
+    // w + γw² − c(x − x0)²: collect x², xy, y², x, y, 1.
+    long double cxx = alpha * (g * s * s - c), cxy = alpha * (-2.0L * g * s), cyy = alpha * g;
+    long double cx = alpha * (-s + 2.0L * g * (-s) * k0 + 2.0L * c * x0), cy = alpha * (1.0L + 2.0L * g * k0);
+    long double c00 = alpha * (k0 + g * k0 * k0 - c * x0 * x0);
+    MarchOnly m;
+    m.g_psi = swap ? shared::Psi{double(c00), double(cy), double(cx), double(cyy), double(cxy), double(cxx)}
+                   : shared::Psi{double(c00), double(cx), double(cy), double(cxx), double(cxy), double(cyy)};
+    m.g_eps = dvec2(eps);
+    m.g_cellLo = ivec2(-300000);
+    m.g_cellHi = ivec2(300000);
+    auto uv = [&](long double dx) {
+      const auto [x, y] = point(dx);
+      return swap ? dvec2(double(y), double(x)) : dvec2(double(x), double(y));
+    };
+    // End pads as makePoint's: at least the snap's allowance (also above the rounding of
+    // the long double point to double).
+    auto end = [&](double t, long double dx) {
+      const dvec2 p = uv(dx);
+      return shared::CurvePoint{t, p, dvec2(pad) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(p))};
+    };
+    const shared::CurvePoint pa = end(0.0, back ? a0 + len : a0), pb = end(1.0, back ? a0 : a0 + len);
+    m.startMarch(pa, pb);
+    REQUIRE(m.g_gen == 2);
+    floatForm += !m.g_mAny;
+    std::set<std::pair<int, int>> cells;
+    int ci = 0, cj = 0;
+    while (m.nextCell(ci, cj)) {
+      cells.insert({ci, cj});
+      REQUIRE(cells.size() < 1000000);
+    }
+    walked += cells.size();
+    ++pieces;
+    for (int k = 0; k <= 2000; ++k) {
+      const long double dx = a0 + len * k / 2000.0L;
+      const auto [x, y] = point(dx);
+      const long double X = swap ? y : x, Y = swap ? x : y;
+      for (int i = int(std::floor(X - eps)); i <= int(std::floor(X + eps)); ++i)
+        for (int j = int(std::floor(Y - eps)); j <= int(std::floor(Y + eps)); ++j) {
+          if (!(i - eps <= X && X <= i + 1 + eps && j - eps <= Y && Y <= j + 1 + eps)) continue;
+          INFO("piece " << q << " point " << k << " at (" << double(X) << ", " << double(Y) << "), cell (" << i << ", "
+                        << j << "), eps " << eps << ", pad " << pad << ", alpha " << double(alpha) << ", swap " << swap
+                        << ", back " << back);
+          REQUIRE(cells.count({i, j}) == 1);
+          ++cellsChecked;
+        }
+    }
+  }
+  INFO(pieces << " pieces, " << floatForm << " with the float test, " << walked << " cells walked");
+  CHECK(pieces > 2000);
+  CHECK(floatForm == pieces);  // finite ψ and small rectangles: the float form held every time
+  CHECK(cellsChecked > 1000000);
 }

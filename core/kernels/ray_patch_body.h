@@ -240,12 +240,19 @@ bool g_mCol;
 // every cell it crosses is reached from the start block by steps along its major and minor
 // directions through cells it crosses; other branches of ψ = 0 only add cells. The walk
 // runs over the piece's rectangle unclamped (g_mRLo..g_mRHi: a piece may start outside T's
-// cells) and returns the cells within T's (g_gLo..g_gHi). g_mEta: the snap's rounding
-// allowance over the rectangle.
-ivec2 g_mRLo, g_mRHi, g_mSLo, g_mSHi;
+// cells) and returns the cells within T's (g_gLo..g_gHi). The test is float (mayCross):
+// ψ re-centred at the rectangle's low cell g_mA (g_mQ1: ψ and its gradient there; g_mQ2:
+// its second-order coefficients), the rectangle and the dilation ε + η relative to it
+// rounded outward (g_mRectLo, g_mRectHi, g_mDil), ψ's error over the rectangle in
+// absolute coordinates rounded up (g_mErr); the cells within ε + η of an end's pad box
+// (g_mSLo..g_mSHi, g_mELo..g_mEHi) are crossed; where the float form cannot hold (ψ not
+// finite, a rectangle past float's integers) every cell is (g_mAny).
+ivec2 g_mRLo, g_mRHi, g_mSLo, g_mSHi, g_mELo, g_mEHi, g_mA;
 int g_mPLo, g_mPHi, g_mCLo, g_mCHi;
-bool g_mAll, g_mRun;
-dvec2 g_mEta;
+bool g_mAll, g_mRun, g_mAny;
+vec3 g_mQ1, g_mQ2;
+vec2 g_mRectLo, g_mRectHi, g_mDil;
+float g_mErr;
 // The march's stop: once a hit is known, cells past the curve's point at the best hit's
 // limit t* cannot hold a better one (the piece is monotone, so its points before t* lie on
 // this side of that point's padded coordinates, and every hit lies within ε of its cell).
@@ -270,8 +277,41 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   OBLONG_PRECISE dvec2 d = b.uv - a.uv;
   int ax = abs(d.x) >= abs(d.y) ? 0 : 1, mi = 1 - ax;
   dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
-  ivec2 clo, chi;
-  if (!snapCells(lo - g_eps, hi + g_eps, clo, chi)) return;
+  // Snapped to cells per axis, from one site (snapRect's rounding allowance): the piece's
+  // rectangle dilated by ε (q = 0: g_mRLo..g_mRHi), the start and the end block (q = 1, 2:
+  // an end's pad box dilated by dil, ε and the allowance over the rectangle).
+  dvec2 dil;
+  double lim = OBLONG_TRAV_SNAP_LIMIT;
+  for (int k = 0; k < 2; ++k) {
+    OBLONG_PRECISE double m = max(abs(lo[k] - g_eps[k]), abs(hi[k] + g_eps[k]));
+    OBLONG_PRECISE double e = g_eps[k] + 2.0 * OBLONG_TRAV_SNAP_ETA * (2.0 + 2.0 * m);
+    dil[k] = e;
+    for (int q = 0; q < 3; ++q) {
+      CurvePoint p = q == 1 ? a : b;
+      OBLONG_PRECISE double l = q == 0 ? lo[k] - g_eps[k] : p.uv[k] - p.pad[k] - dil[k];
+      OBLONG_PRECISE double h = q == 0 ? hi[k] + g_eps[k] : p.uv[k] + p.pad[k] + dil[k];
+      OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(l) + abs(h));
+      int c0 = int(clamp(floor(l - eta), -lim, lim)), c1 = int(clamp(floor(h + eta), -lim, lim));
+      if (q == 0) {
+        g_mRLo[k] = c0;
+        g_mRHi[k] = c1;
+      } else if (q == 1) {
+        g_mSLo[k] = c0;
+        g_mSHi[k] = c1;
+      } else {
+        g_mELo[k] = c0;
+        g_mEHi[k] = c1;
+      }
+    }
+  }
+  // The blocks within the rectangle (their larger allowance may reach a cell beyond it,
+  // which no point of the piece is within ε of).
+  g_mSLo = max(g_mSLo, g_mRLo);
+  g_mSHi = min(g_mSHi, g_mRHi);
+  g_mELo = max(g_mELo, g_mRLo);
+  g_mEHi = min(g_mEHi, g_mRHi);
+  ivec2 clo = max(g_mRLo, g_cellLo), chi = min(g_mRHi, g_cellHi);  // snapCells' cells
+  if (!(clo.x <= chi.x && clo.y <= chi.y)) return;
   g_gen = 2;
   g_ma = a;
   g_mb = b;
@@ -282,13 +322,26 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   g_mSm = d[mi] >= 0.0 ? 1 : -1;
   for (int k = 0; k < 2; ++k) g_mCertain[k] = abs(d[k]) > a.pad[k] + b.pad[k];
   g_mAll = !g_mCertain.x || !g_mCertain.y;
-  snapRect(lo - g_eps, hi + g_eps, g_mRLo, g_mRHi);
-  snapRect(a.uv - a.pad - g_eps, a.uv + a.pad + g_eps, g_mSLo, g_mSHi);
+  // ψ re-centred at A (exact algebra; the double rounding is far inside g_mErr's margin)
+  // and rounded to float; its error over the rectangle: OBLONG_TRAV_PSI_ERR of its terms'
+  // magnitude at the rectangle's largest absolute coordinates.
+  g_mA = g_mRLo;
+  dvec2 A = dvec2(g_mA);
+  double q0 = psiEval(g_psi, A);
+  dvec2 qg = psiGrad(g_psi, A);
+  g_mQ1 = vec3(float(q0), float(qg.x), float(qg.y));
+  g_mQ2 = vec3(float(g_psi.cXX), float(g_psi.cXY), float(g_psi.cYY));
+  OBLONG_PRECISE dvec2 M = max(abs(dvec2(g_mRLo) - 1.0), abs(dvec2(g_mRHi) + 2.0));
+  OBLONG_PRECISE double mag = abs(g_psi.c0) + abs(g_psi.cX) * M.x + abs(g_psi.cY) * M.y + abs(g_psi.cXX) * M.x * M.x +
+                              abs(g_psi.cXY) * M.x * M.y + abs(g_psi.cYY) * M.y * M.y;
+  g_mErr = floatAbove(OBLONG_TRAV_PSI_ERR * mag, mag);
   for (int k = 0; k < 2; ++k) {
-    OBLONG_PRECISE double m = max(abs(lo[k] - g_eps[k]), abs(hi[k] + g_eps[k]));
-    OBLONG_PRECISE double eta = 2.0 * OBLONG_TRAV_SNAP_ETA * (2.0 + 2.0 * m);
-    g_mEta[k] = eta;
+    g_mRectLo[k] = floatBelow(lo[k] - A[k], abs(lo[k]) + abs(A[k]));
+    g_mRectHi[k] = floatAbove(hi[k] - A[k], abs(hi[k]) + abs(A[k]));
+    g_mDil[k] = floatAbove(dil[k], dil[k]);
   }
+  g_mAny = !(finiteF(g_mQ1.x) && finiteF(g_mQ1.y) && finiteF(g_mQ1.z) && finiteF(g_mQ2.x) && finiteF(g_mQ2.y) &&
+             finiteF(g_mQ2.z) && finiteF(g_mErr) && max(g_mRHi.x - g_mRLo.x, g_mRHi.y - g_mRLo.y) < 1000000);
   g_mK = g_mAll ? (g_mSa > 0 ? g_mRLo[ax] : g_mRHi[ax]) : (g_mSa > 0 ? g_mSLo[ax] : g_mSHi[ax]);
   g_mPLo = 1;  // no row reached yet
   g_mPHi = 0;
@@ -322,36 +375,34 @@ bool pastStop(int a, int k) {
   return g_mStopAxis[a] && (sg > 0 ? double(k) - g_eps[a] > g_mStop[a] : double(k + 1) + g_eps[a] < g_mStop[a]);
 }
 
-// The interval test of the walk: may the piece cross cell (k, j) (major, minor) dilated by
-// ε and η? The dilated cell, clipped to the piece's rectangle, meets an end's pad box, or ψ
-// may vanish on it: |ψ| at its centre against ψ's variation over it (gradient and
-// second-order terms: exact for a quadratic) plus ψ's error (OBLONG_TRAV_PSI_ERR of its
-// terms' magnitude, the coefficients' rounding that quadraticRoots allows, with margin).
+// The interval test of the walk, in float: may the piece cross cell (k, j) (major, minor)
+// dilated by ε + η? It is within that of an end's pad box, or ψ may vanish on the dilated
+// cell clipped to the piece's rectangle: |ψ| at the box's centre against ψ's variation
+// over it (gradient and second-order terms: exact for a quadratic) plus ψ's error — its
+// coefficients' (g_mErr) and the float evaluation's: the coefficients' rounding to float
+// (2^-24 each), ψ's dozen roundings, the gradient's in the variation and the variation's
+// own come to at most about 2.6·2^-20 of the terms' magnitude over the box; 2^-17 of it.
+// The box's half-size is widened by 2^-21 of its coordinates, more than the rounding of
+// its sides, centre and size.
 bool mayCross(int k, int j) {
-  int ax = g_mAx;
-  dvec2 plo = pieceLo(g_ma, g_mb), phi = pieceHi(g_ma, g_mb);
-  ivec2 c = ax == 0 ? ivec2(k, j) : ivec2(j, k);
-  dvec2 lo, hi;
-  for (int a = 0; a < 2; ++a) {
-    OBLONG_PRECISE double l = double(c[a]) - g_eps[a] - g_mEta[a], h = double(c[a] + 1) + g_eps[a] + g_mEta[a];
-    lo[a] = max(l, plo[a]);
-    hi[a] = min(h, phi[a]);
-  }
+  ivec2 c = g_mAx == 0 ? ivec2(k, j) : ivec2(j, k);
+  if (g_mAny || (c.x >= g_mSLo.x && c.x <= g_mSHi.x && c.y >= g_mSLo.y && c.y <= g_mSHi.y) ||
+      (c.x >= g_mELo.x && c.x <= g_mEHi.x && c.y >= g_mELo.y && c.y <= g_mEHi.y))
+    return true;
+  vec2 p = vec2(c - g_mA);  // exact: the rectangle spans less than 2^24 cells
+  OBLONG_PRECISE vec2 lo = max(p - g_mDil, g_mRectLo), hi = min(p + 1.0f + g_mDil, g_mRectHi);
   if (!(lo.x <= hi.x && lo.y <= hi.y)) return false;
-  for (int e = 0; e < 2; ++e) {
-    CurvePoint p = e == 0 ? g_ma : g_mb;
-    OBLONG_PRECISE dvec2 elo = p.uv - p.pad, ehi = p.uv + p.pad;
-    if (lo.x <= ehi.x && lo.y <= ehi.y && elo.x <= hi.x && elo.y <= hi.y) return true;
-  }
-  OBLONG_PRECISE dvec2 m = 0.5 * (lo + hi), r = 0.5 * (hi - lo);
-  double v = psiEval(g_psi, m);
-  dvec2 g = psiGrad(g_psi, m);
-  OBLONG_PRECISE double var = abs(g.x) * r.x + abs(g.y) * r.y + abs(g_psi.cXX) * r.x * r.x +
-                              abs(g_psi.cXY) * r.x * r.y + abs(g_psi.cYY) * r.y * r.y;
-  OBLONG_PRECISE dvec2 M = max(abs(lo), abs(hi));
-  OBLONG_PRECISE double mag = abs(g_psi.c0) + abs(g_psi.cX) * M.x + abs(g_psi.cY) * M.y + abs(g_psi.cXX) * M.x * M.x +
-                              abs(g_psi.cXY) * M.x * M.y + abs(g_psi.cYY) * M.y * M.y;
-  OBLONG_PRECISE double bound = var + OBLONG_TRAV_PSI_ERR * mag;
+  OBLONG_PRECISE vec2 m = 0.5f * (lo + hi);
+  OBLONG_PRECISE vec2 r = 0.5f * (hi - lo) + float(OBLONG_U2M21) * (abs(lo) + abs(hi));
+  vec3 Q = g_mQ2;
+  OBLONG_PRECISE float v = g_mQ1.x + m.x * (g_mQ1.y + Q.x * m.x + Q.y * m.y) + m.y * (g_mQ1.z + Q.z * m.y);
+  OBLONG_PRECISE float gx = g_mQ1.y + 2.0f * Q.x * m.x + Q.y * m.y, gy = g_mQ1.z + Q.y * m.x + 2.0f * Q.z * m.y;
+  OBLONG_PRECISE float var = abs(gx) * r.x + abs(gy) * r.y + abs(Q.x) * r.x * r.x + abs(Q.y) * r.x * r.y +
+                             abs(Q.z) * r.y * r.y;
+  OBLONG_PRECISE vec2 M = abs(m) + r;
+  OBLONG_PRECISE float mag = abs(g_mQ1.x) + abs(g_mQ1.y) * M.x + abs(g_mQ1.z) * M.y + abs(Q.x) * M.x * M.x +
+                             abs(Q.y) * M.x * M.y + abs(Q.z) * M.y * M.y;
+  OBLONG_PRECISE float bound = var + float(OBLONG_U2M17) * (var + mag) + g_mErr;
   return abs(v) <= bound;
 }
 
@@ -386,8 +437,9 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
       // The column's seeds; none: no cell of the piece is left.
       int lo = g_mPLo, hi = g_mPHi;
       if (g_mK >= g_mSLo[ax] && g_mK <= g_mSHi[ax]) {
-        lo = lo <= hi ? min(lo, g_mSLo[mi]) : g_mSLo[mi];
-        hi = max(hi, g_mSHi[mi]);
+        bool none = lo > hi;
+        lo = none ? g_mSLo[mi] : min(lo, g_mSLo[mi]);
+        hi = none ? g_mSHi[mi] : max(hi, g_mSHi[mi]);
       }
       if (g_mAll) {
         lo = g_mRLo[mi];
@@ -416,8 +468,9 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
     g_mJ += g_mSm;
     g_mRun = mayCross(g_mK, j);
     if (!g_mRun) continue;
-    g_mCLo = g_mCLo <= g_mCHi ? min(g_mCLo, j) : j;
-    g_mCHi = max(g_mCHi, j);
+    bool first = g_mCLo > g_mCHi;
+    g_mCLo = first ? j : min(g_mCLo, j);
+    g_mCHi = first ? j : max(g_mCHi, j);
     ci = ax == 0 ? g_mK : j;
     cj = ax == 0 ? j : g_mK;
     if (ci < g_gLo.x || ci > g_gHi.x || cj < g_gLo.y || cj > g_gHi.y) continue;  // outside T's cells

@@ -65,6 +65,7 @@ OBLONG_INLINE void clipBox(OBLONG_IN(dvec3) lo, OBLONG_IN(dvec3) hi, OBLONG_IN(d
 // plus the double subtraction's error; oErr is four times that, and a slab's t is off by
 // at most that error times |invD| plus 4u·|t| (the division's, the difference's and the
 // product's rounding): clipBoxF widens each t by oErr·|invD| + 2^-21·|t|.
+#define OBLONG_U2M17 7.62939453125e-6     // 2^-17
 #define OBLONG_U2M20 9.5367431640625e-7   // 2^-20
 #define OBLONG_U2M21 4.76837158203125e-7  // 2^-21
 #define OBLONG_U2M22 2.384185791015625e-7 // 2^-22

@@ -1,5 +1,9 @@
 // Scratch: today's march's cells against the walk's, per marched piece (not committed).
 #if defined(OBLONG_WALK_CHECK) && defined(__cplusplus)
+// The tree before the walk had these in core/kernels/ray_patch.h and constants.h.
+static bool atEnd(const CurvePoint& e, int ax, double c) {
+  return abs(c - e.uv[ax]) <= e.pad[ax] * 1.0000001 + 1e-12;
+}
 void oldMinorAt(double c, double& wlo, double& whi) {
   int ax = g_mAx, mi = 1 - ax;
   dvec2 lo = pieceLo(g_ma, g_mb), hi = pieceHi(g_ma, g_mb);
@@ -64,5 +68,13 @@ void walkCheck() {
     std::fprintf(stderr, "WALKCHECK missing %zu of %zu (new %zu) ax %d sa %d sm %d a (%.17g %.17g ±%g %g) b (%.17g %.17g ±%g %g) eps %g %g\n",
                  missing, olds.size(), news.size(), ax, g_mSa, g_mSm, g_ma.uv.x, g_ma.uv.y, g_ma.pad.x, g_ma.pad.y,
                  g_mb.uv.x, g_mb.uv.y, g_mb.pad.x, g_mb.pad.y, g_eps.x, g_eps.y);
+  if (missing && walkStats().reported <= 5) {
+    std::fprintf(stderr, "  R %d %d..%d %d S %d %d..%d %d E %d %d..%d %d g %d %d..%d %d any %d all %d K %d\n", g_mRLo.x, g_mRLo.y, g_mRHi.x, g_mRHi.y,
+                 g_mSLo.x, g_mSLo.y, g_mSHi.x, g_mSHi.y, g_mELo.x, g_mELo.y, g_mEHi.x, g_mEHi.y, g_gLo.x, g_gLo.y, g_gHi.x, g_gHi.y, int(g_mAny), int(g_mAll), g_mK);
+    std::fprintf(stderr, "  psi %.17g %.17g %.17g %.17g %.17g %.17g Q1 %.9g %.9g %.9g Q2 %.9g %.9g %.9g err %g rect %g %g %g %g dil %g %g\n",
+                 g_psi.c0, g_psi.cX, g_psi.cY, g_psi.cXX, g_psi.cXY, g_psi.cYY, g_mQ1.x, g_mQ1.y, g_mQ1.z, g_mQ2.x, g_mQ2.y, g_mQ2.z, g_mErr,
+                 g_mRectLo.x, g_mRectLo.y, g_mRectHi.x, g_mRectHi.y, g_mDil.x, g_mDil.y);
+    for (const auto& c : olds) std::fprintf(stderr, "  old cell %d %d in new %d\n", c.first, c.second, int(news.count(c)));
+  }
 }
 #endif
