@@ -367,21 +367,36 @@ TEST_CASE("the march's walk reaches every cell within eps of its piece", "[trave
   // (x², xy, y² terms, a second branch at w ≈ −1/γ), anywhere up to 10^5 cells from the
   // origin, either axis major, either direction, with ε from 10^-3 to 2 cells and end
   // pads from 10^-12 to a quarter cell (plus the snap's allowance, as makePoint's); every cell whose ε-dilated square holds a point of
-  // the arc (2 000 points along it, in long double) must be among the walk's cells.
+  // the arc (2 000 points along it, in long double) must be among the walk's cells; a
+  // quarter of the arcs are lines touching a dilated cell at a corner only.
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   auto logU = [&](double lo, double hi) { return lo * std::pow(hi / lo, U(rng)); };
-  int pieces = 0, cellsChecked = 0, floatForm = 0;
+  int pieces = 0, cellsChecked = 0, floatForm = 0, misses = 0;
   size_t walked = 0;
+  std::string firstMiss;
   for (int q = 0; q < 4000; ++q) {
-    const long double x0 = (U(rng) - 0.5) * 2.0 * logU(1.0, 1e5), y0 = (U(rng) - 0.5) * 2.0 * logU(1.0, 1e5);
+    long double x0 = (U(rng) - 0.5) * 2.0 * logU(1.0, 1e5), y0 = (U(rng) - 0.5) * 2.0 * logU(1.0, 1e5);
     const long double s = (U(rng) - 0.5) * 2.0 * logU(1e-3, 1.0);
-    const long double c = (U(rng) - 0.5) * 2.0 * logU(1e-6, 1e-1), g = (U(rng) - 0.5) * 2.0 * logU(1e-6, 1.0);
+    long double c = (U(rng) - 0.5) * 2.0 * logU(1e-6, 1e-1), g = (U(rng) - 0.5) * 2.0 * logU(1e-6, 1.0);
     const long double alpha = (U(rng) < 0.5 ? -1.0 : 1.0) * logU(1e-6, 1e6);
-    const double len = logU(1e-3, 8.0), eps = logU(1e-3, 2.0), pad = logU(1e-12, 0.25);
+    const bool corner = q % 4 == 0;
+    const double len = corner ? 4.0 + 4.0 * U(rng) : logU(1e-3, 8.0), eps = corner ? logU(1e-3, 0.1) : logU(1e-3, 2.0);
+    const double pad = corner ? logU(1e-12, 1e-6) : logU(1e-12, 0.25);
     const bool swap = U(rng) < 0.5, back = U(rng) < 0.5;
     // The arc over x in [x0 + a0, x0 + a0 + len] (the branch through w = 0 at x0).
-    const long double a0 = (U(rng) - 0.5) * 4.0;
+    long double a0 = (U(rng) - 0.5) * 4.0;
+    // One piece in four is a line that touches a cell's dilated square only at a corner
+    // (the middle point of the 2 000), far from its ends: the tightest case of the interval
+    // test, where its rounding pad decides.
+    if (corner) {
+      const long double i = std::floor(x0), j = std::floor(y0);
+      c = g = 0.0L;
+      const bool upper = U(rng) < 0.5;  // the corner's cell lies above the line, or below
+      x0 = (s > 0) == upper ? i + 1 + eps : i - eps;
+      y0 = upper ? j - eps : j + 1 + eps;
+      a0 = -len / 2;
+    }
     auto wAt = [&](long double dx) {  // the root of γw² + w − c·dx² near 0
       const long double r = c * dx * dx;
       return std::abs(g * r) < 1e-12L ? r - g * r * r : (-1.0L + std::sqrt(1.0L + 4.0L * g * r)) / (2.0L * g);
@@ -430,10 +445,8 @@ TEST_CASE("the march's walk reaches every cell within eps of its piece", "[trave
     floatForm += !m.g_mAny;
     std::set<std::pair<int, int>> cells;
     int ci = 0, cj = 0;
-    while (m.nextCell(ci, cj)) {
-      cells.insert({ci, cj});
-      REQUIRE(cells.size() < 1000000);
-    }
+    while (cells.size() < 1000000 && m.nextCell(ci, cj)) cells.insert({ci, cj});
+    REQUIRE(cells.size() < 1000000);
     walked += cells.size();
     ++pieces;
     for (int k = 0; k <= 2000; ++k) {
@@ -443,14 +456,19 @@ TEST_CASE("the march's walk reaches every cell within eps of its piece", "[trave
       for (int i = int(std::floor(X - eps)); i <= int(std::floor(X + eps)); ++i)
         for (int j = int(std::floor(Y - eps)); j <= int(std::floor(Y + eps)); ++j) {
           if (!(i - eps <= X && X <= i + 1 + eps && j - eps <= Y && Y <= j + 1 + eps)) continue;
-          INFO("piece " << q << " point " << k << " at (" << double(X) << ", " << double(Y) << "), cell (" << i << ", "
-                        << j << "), eps " << eps << ", pad " << pad << ", alpha " << double(alpha) << ", swap " << swap
-                        << ", back " << back);
-          REQUIRE(cells.count({i, j}) == 1);
           ++cellsChecked;
+          if (cells.count({i, j}) == 1 || !firstMiss.empty()) {
+            misses += cells.count({i, j}) == 0;
+            continue;
+          }
+          ++misses;
+          firstMiss = fmt::format("piece {} point {} at ({}, {}), cell ({}, {}), eps {}, pad {}, alpha {}, swap {}, back {}",
+                                  q, k, double(X), double(Y), i, j, eps, pad, double(alpha), swap, back);
         }
     }
   }
+  INFO(firstMiss);
+  CHECK(misses == 0);
   INFO(pieces << " pieces, " << floatForm << " with the float test, " << walked << " cells walked");
   CHECK(pieces > 2000);
   CHECK(floatForm == pieces);  // finite ψ and small rectangles: the float form held every time
