@@ -205,18 +205,14 @@ void pushBox(OBLONG_IN(ivec2) lo, OBLONG_IN(ivec2) hi, double ta, double tb) {
 }
 bool isBox(OBLONG_IN(RpEntry) e) { return e.a.pad.x == OBLONG_RP_BOX_ENTRY; }
 
-// Local cells touching [lo, hi] (snapRect), clipped to T's cells (snapCells: false when
-// empty).
-void snapRect(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
+// Local cells touching [lo, hi], clipped to T's cells. False when empty.
+bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
   double lim = OBLONG_TRAV_SNAP_LIMIT;
   for (int k = 0; k < 2; ++k) {
     OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(lo[k]) + abs(hi[k]));
     clo[k] = int(clamp(floor(lo[k] - eta), -lim, lim));
     chi[k] = int(clamp(floor(hi[k] + eta), -lim, lim));
   }
-}
-bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
-  snapRect(lo, hi, clo, chi);
   clo = max(clo, g_cellLo);
   chi = min(chi, g_cellHi);
   return clo.x <= chi.x && clo.y <= chi.y;
@@ -277,7 +273,7 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   OBLONG_PRECISE dvec2 d = b.uv - a.uv;
   int ax = abs(d.x) >= abs(d.y) ? 0 : 1, mi = 1 - ax;
   dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
-  // Snapped to cells per axis, from one site (snapRect's rounding allowance): the piece's
+  // Snapped to cells per axis, from one site (snapCells' rounding allowance, unclamped): the piece's
   // rectangle dilated by ε (q = 0: g_mRLo..g_mRHi), the start and the end block (q = 1, 2:
   // an end's pad box dilated by dil, ε and the allowance over the rectangle).
   dvec2 dil;
@@ -454,10 +450,11 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
       g_mCHi = 0;
       g_mCol = true;
     }
-    // The column goes on within its seeds, or right after a reached row.
-    bool stop = pastStop(mi, g_mJ);
+    // The column goes on within its seeds, or right after a reached row, up to the stop.
+    bool end = g_mJ < g_mRLo[mi] || g_mJ > g_mRHi[mi] || !(g_mRun || (g_mJ >= g_mJ0 && g_mJ <= g_mJ1));
+    bool stop = !end && pastStop(mi, g_mJ);
     if (stop) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
-    if (stop || g_mJ < g_mRLo[mi] || g_mJ > g_mRHi[mi] || !(g_mRun || (g_mJ >= g_mJ0 && g_mJ <= g_mJ1))) {
+    if (end || stop) {
       g_mPLo = g_mCLo;
       g_mPHi = g_mCHi;
       g_mCol = false;
