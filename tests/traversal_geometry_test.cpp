@@ -19,6 +19,7 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
+#include <bit>
 #include <chrono>
 #include <cstring>
 #include <numbers>
@@ -473,4 +474,50 @@ TEST_CASE("the march's walk reaches every cell within eps of its piece", "[trave
   CHECK(pieces > 2000);
   CHECK(floatForm == pieces);  // finite ψ and small rectangles: the float form held every time
   CHECK(cellsChecked > 1000000);
+}
+
+TEST_CASE("nearestF takes a quotient or root within 4 ulp to IEEE's, in integers", "[traversal][unit]") {
+  // The GPU's divF and sqrtF correct its float `/` and sqrt with core/kernels/lang.h's
+  // nearestF; here its code runs on the CPU from estimates 1 to 4 ulp off IEEE's result
+  // (either side), over operands of every binade (subnormals too), quotients near powers of
+  // two (where the ulp below is half the ulp above) and subnormal quotients.
+  std::mt19937 rng(47);
+  std::uniform_int_distribution<uint32_t> anyBits(1u, 0x7f7fffffu);
+  std::uniform_int_distribution<int> small(-6, 6);
+  const auto bits = [](float x) { return std::bit_cast<uint32_t>(x); };
+  const auto fromBits = [](uint32_t b) { return std::bit_cast<float>(b); };
+  int checked = 0, wrong = 0;
+  std::string first;
+  // r within 4 ulp of q (q > 0 finite) must come back as q.
+  const auto check = [&](float A, float B, bool root) {
+    const float q = root ? std::sqrt(A) : A / B;
+    if (!(q > 0.0f) || std::isinf(q)) return;
+    for (int k = -4; k <= 4; ++k) {
+      const int64_t rb = int64_t(bits(q)) + k;
+      if (rb <= 0 || rb >= 0x7f800000) continue;
+      const float got = shared::nearestF(fromBits(uint32_t(rb)), A, B, root);
+      ++checked;
+      if (bits(got) != bits(q)) {
+        if (++wrong == 1)
+          first = fmt::format("{} of {:a} and {:a} from {:+d} ulp: {:a}, IEEE {:a}", root ? "root" : "quotient", A, B,
+                              k, got, q);
+      }
+    }
+  };
+  for (int n = 0; n < 200000; ++n) {
+    const float A = fromBits(anyBits(rng)), B = fromBits(anyBits(rng));
+    check(A, B, false);
+    check(A, 1.0f, true);
+    // A quotient near a power of two, either side (A a few ulp from B·2^j: the quotients
+    // fall between the neighbours below 2^j, whose spacing is half the one above), a
+    // subnormal quotient, and a root near a power of two (A a few ulp from 4^j).
+    const float Bn = fromBits(0x3f800000u | (anyBits(rng) & 0x7fffffu));
+    const int j = small(rng) * 20;
+    check(fromBits(uint32_t(int(bits(std::ldexp(Bn, j))) + small(rng))), Bn, false);
+    check(fromBits(anyBits(rng) & 0x007fffffu | 1u), fromBits(0x3f800000u + (anyBits(rng) & 0x0fffffffu)), false);
+    check(fromBits(uint32_t(int(bits(std::ldexp(1.0f, 2 * j))) + small(rng))), 1.0f, true);
+  }
+  INFO(first);
+  CHECK(checked > 6000000);
+  CHECK(wrong == 0);
 }

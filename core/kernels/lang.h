@@ -96,6 +96,10 @@ inline dvec3 crossD(const dvec3& x, const dvec3& y) {
   return dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
 }
 inline double lengthD(const dvec3& v) { return std::sqrt(dotD(v, v)); }
+// GLSL's bit built-ins that nearestF uses, so that the C++ tests run its code.
+inline uint floatBitsToUint(float x) { return std::bit_cast<uint>(x); }
+inline float uintBitsToFloat(uint x) { return std::bit_cast<float>(x); }
+inline int findMSB(uint v) { return int(std::bit_width(v)) - 1; }  // GLSL's, for v > 0
 }  // namespace oblong::shared
 
 #define OBLONG_KERNELS_BEGIN namespace oblong::shared {
@@ -157,46 +161,86 @@ vec3 crossF(vec3 x, vec3 y) {
   precise vec3 r = vec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
   return r;
 }
-// Float quotients and square roots, correctly rounded as IEEE (and the CPU) has them:
-// a GPU's float `/` and sqrt need not be (Vulkan allows 2.5 ulp, NVIDIA's differ from the
-// CPU's), and a detour through double does not help (lavapipe's double quotient rounded
-// to float differs from the float quotient). The GPU's result q is corrected against the
-// midpoints to its float neighbours, m = (q + q±) / 2: m·b and m·m are exact in double
-// (25 + 24 and 25 + 25 bits), so each comparison is exact; ties go to the even neighbour.
-float nextUpF(float x) { return uintBitsToFloat(floatBitsToUint(x) + 1u); }    // x > 0, finite
-float nextDownF(float x) { return uintBitsToFloat(floatBitsToUint(x) - 1u); }  // x > 0
-// The float nearest to A / B (root false) or to √A (root true), A, B > 0, from an estimate
-// r > 0 within 4 ulp of it: r steps to a neighbour while A lies beyond the midpoint m
-// between them, A against m·B (or m·m); an exact midpoint goes to the even one (a
-// quotient's; a root is never one).
-float nearestF(float r, double A, double B, bool root) {
-  for (int it = 0; it < 4; ++it) {
-    float dn = nextDownF(r), up = nextUpF(r);
-    precise double lo = (double(r) + double(dn)) * 0.5, hi = (double(r) + double(up)) * 0.5;
-    precise double loB = lo * (root ? lo : B), hiB = hi * (root ? hi : B);
-    if (A < loB) r = dn;
-    else if (A > hiB) r = up;
-    else {
-      if (A == loB && (floatBitsToUint(r) & 1u) != 0u) r = dn;
-      else if (A == hiB && (floatBitsToUint(r) & 1u) != 0u) r = up;
-      break;
-    }
-  }
-  return r;
-}
+// divF and sqrtF: nearestF (below, common to both languages) corrects the GPU's float
+// `/` and sqrt, which need not be correctly rounded (docs/decisions.md, "GPU arithmetic").
+float nearestF(float r, float A, float B, bool root);
 float divF(float a, float b) {
   precise float q = a / b;
-  if (a == 0.0f || isinf(a) || isnan(a) || b == 0.0f || isinf(b) || isnan(b) || q == 0.0f || isinf(q)) return q;
-  float r = nearestF(abs(q), abs(double(a)), abs(double(b)), false);
+  // a, b and q finite and non-zero (|x|'s bits minus one below the largest finite's): the
+  // three tests as one vector comparison, without a branch each.
+  uvec3 m = (floatBitsToUint(vec3(a, b, q)) & 0x7fffffffu) - 1u;
+  if (!all(lessThan(m, uvec3(0x7f7fffffu)))) return q;
+  float r = nearestF(abs(q), abs(a), abs(b), false);
   return (a < 0.0f) != (b < 0.0f) ? -r : r;
 }
 float sqrtF(float x) {
   precise float q = sqrt(x);
   if (!(x > 0.0f) || isinf(x) || q == 0.0f) return q;
-  return nearestF(q, double(x), 1.0, true);
+  return nearestF(q, x, 1.0f, true);
 }
 float lengthF(vec3 v) { return sqrtF(dotF(v, v)); }
 
 #endif
+
+// ---- both languages ----------------------------------------------------------------------
+OBLONG_KERNELS_BEGIN
+// The float nearest to A / B (root false) or to √A (root true), A, B > 0 finite, from an
+// estimate r > 0 within 4 ulp of it (a GPU's `/` or sqrt: Vulkan allows 2.5 ulp for a
+// quotient): r steps to a neighbour while A lies beyond the midpoint between them, A
+// against the midpoint times B (or squared); an exact midpoint goes to the even one (a
+// quotient's; a root is never one). The comparisons are exact in 32-bit integers: with
+// r = R·2^e (R its integer significand, e its ulp's exponent) and B = M·2^f, A − r·B is an
+// integer D in units of 2^(e+f−k) (a root's A − r²: of 2^(2e−2k)), k = 1, or 2 where r is
+// a power of two; within 4 ulp |D| < 2^30, so its 32-bit wrap-around value is D itself,
+// and the midpoints are small integers. No double: a GPU without shaderFloat64 runs it,
+// one with FP64 at 1/64 rate does not pay for it. divF and sqrtF call it on the GPU; C++
+// runs it in the tests, against IEEE's quotients and roots.
+// x > 0 finite as m·2^e, m in [2^23, 2^24) (a subnormal's significand normalised).
+OBLONG_INLINE void splitF(float x, OBLONG_OUT(uint) m, OBLONG_OUT(int) e) {
+  uint b = floatBitsToUint(x);
+  int be = int(b >> 23u);
+  m = b & 0x7fffffu;
+  if (be == 0) {
+    int sh = 23 - findMSB(m);
+    m = m << uint(sh);
+    e = -149 - sh;
+  } else {
+    m = m | 0x800000u;
+    e = be - 150;
+  }
+}
+OBLONG_INLINE float nearestF(float r, float A, float B, bool root) {
+  uint ma, mb;
+  int ea, eb;
+  splitF(A, ma, ea);
+  splitF(B, mb, eb);
+  for (int it = 0; it < 4; ++it) {
+    uint bits = floatBitsToUint(r);
+    int be = int(bits >> 23u);
+    uint R = be == 0 ? (bits & 0x7fffffu) : ((bits & 0x7fffffu) | 0x800000u);
+    int e = be == 0 ? -149 : be - 150;
+    // The midpoints are c ± 1 in units of 2^(e−k), c = R·2^k: k = 2 at a power of two (the
+    // neighbour below is half an ulp away: its midpoint is c − 1, the one above c + 2).
+    bool pow2 = R == 0x800000u && be > 1;
+    int k = pow2 ? 2 : 1;
+    uint c = R << uint(k);
+    // A − r·B (r²) in units of 2^(e−k)·2^eb (2^(2e−2k)): A = ma·2^s of them.
+    int s = root ? ea - 2 * e + 2 * k : ea - e - eb + k;
+    uint M = root ? c : mb;
+    int d = int((ma << uint(clamp(s, 0, 31))) - c * M);
+    // The midpoints' D: (c ± 1)·M − c·M, or (c ± 1)² − c² for a root.
+    int hi = int((pow2 ? 2u : 1u) * (root ? 2u * c + (pow2 ? 2u : 1u) : mb));
+    int lo = root ? 1 - int(2u * c) : -int(mb);
+    if (s < 0) d = lo - 1;  // far below (not within 4 ulp): step down
+    if (s > 31) d = hi + 1;
+    bool odd = (bits & 1u) != 0u;
+    if (d < lo || (d == lo && odd)) r = uintBitsToFloat(bits - 1u);
+    else if (d > hi || (d == hi && odd)) r = uintBitsToFloat(bits + 1u);
+    if ((d < lo || d > hi) && r > 0.0f && !isinfF(r)) continue;
+    break;
+  }
+  return r;
+}
+OBLONG_KERNELS_END
 
 #endif

@@ -1,8 +1,11 @@
 #version 460
 // Closest hit of a displaced prism: the intersection shader already computed the hit's
-// texture coordinates and micro-triangle normal.
+// texture coordinates and its micro-triangle's normal, unnormalised; normalised here
+// (microHitAttributes, traversal/microtri.h), once per ray rather than in the
+// intersection shader at every closer hit.
 #define OBLONG_RECORDS_NO_TRIANGLES  // no double: no Float64 capability
 #include "common.glsl"
+#include "core/kernels/lang.h"  // divF, sqrtF: no double
 
 layout(location = 0) rayPayloadInEXT PayloadGpu pl;
 hitAttributeEXT HitAttrGpu attr;
@@ -13,5 +16,7 @@ void main() {
   pl.prim = gl_PrimitiveID;
   pl.u = attr.uv.x;
   pl.v = attr.uv.y;
-  pl.ng = attr.ng;
+  precise vec3 n = attr.ng;
+  precise float len = lengthF(n);
+  pl.ng = len > 0.0 ? vec3(divF(n.x, len), divF(n.y, len), divF(n.z, len)) : vec3(0.0);
 }

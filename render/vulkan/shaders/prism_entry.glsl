@@ -39,9 +39,9 @@ void endPrism(bool found) {
   if (!found || !(g_hitT < gl_RayTmaxEXT)) return;
   // microHitAttributes (traversal/microtri.h).
   precise vec2 uv = g_hb.x * g_hv0.uv + g_hb.y * g_hv1.uv + g_hb.z * g_hv2.uv;
+  // The normal unnormalised: the closest-hit stage normalises it, once per ray.
   precise vec3 n = crossF(g_hv1.p - g_hv0.p, g_hv2.p - g_hv0.p);
-  precise float len = lengthF(n);
   attr.uv = uv;
-  attr.ng = len > 0.0 ? vec3(divF(n.x, len), divF(n.y, len), divF(n.z, len)) : vec3(0.0);
+  attr.ng = n;
   reportIntersectionEXT(g_hitT, 0u);
 }
