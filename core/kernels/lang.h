@@ -91,6 +91,7 @@ inline vec3 crossF(const vec3& x, const vec3& y) {
 inline float divF(float a, float b) { return a / b; }
 inline float sqrtF(float x) { return std::sqrt(x); }
 inline float lengthF(const vec3& v) { return std::sqrt(dotF(v, v)); }
+inline float rcpSqrtF(float x) { return divF(1.0f, sqrtF(x)); }
 inline double dotD(const dvec3& a, const dvec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline dvec3 crossD(const dvec3& x, const dvec3& y) {
   return dvec3(x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y);
@@ -179,6 +180,27 @@ float sqrtF(float x) {
   return nearestF(q, x, 1.0f, true);
 }
 float lengthF(vec3 v) { return sqrtF(dotF(v, v)); }
+// divF(1.0f, sqrtF(x)), the two corrections from one nearestF call site (a shader inlines
+// each call): the root, then its reciprocal, each as divF and sqrtF take them.
+float rcpSqrtF(float x) {
+  float num = x, den = 1.0f;
+  precise float q = sqrt(x);
+  for (int k = 0; k < 2; ++k) {
+    bool root = k == 0;
+    uvec3 m = (floatBitsToUint(vec3(num, den, q)) & 0x7fffffffu) - 1u;
+    if (all(lessThan(m, uvec3(0x7f7fffffu))) && num > 0.0f) {
+      float r = nearestF(abs(q), num, abs(den), root);
+      q = den < 0.0f ? -r : r;
+    }
+    if (root) {
+      num = 1.0f;
+      den = q;
+      precise float rq = 1.0f / q;
+      q = rq;
+    }
+  }
+  return q;
+}
 
 #endif
 

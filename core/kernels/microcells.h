@@ -257,7 +257,7 @@ OBLONG_INLINE int mcHalf(OBLONG_IN(McEdges) E, int i, int j, int side, int mask,
 
 // glm::normalize: v · (1 / sqrt(dot(v, v))).
 OBLONG_FORCE_INLINE vec3 mcNormalize(OBLONG_IN(vec3) v) {
-  OBLONG_PRECISE float inv = divF(1.0f, sqrtF(dotF(v, v)));
+  OBLONG_PRECISE float inv = rcpSqrtF(dotF(v, v));
   OBLONG_PRECISE vec3 r = v * inv;
   return r;
 }

@@ -43,9 +43,11 @@ OBLONG_INLINE WatertightRay makeWatertightRay(OBLONG_IN(vec3) o, OBLONG_IN(vec3)
     R.kx = R.ky;
     R.ky = s;
   }
-  OBLONG_PRECISE float sx = divF(-d[R.kx], d[R.kz]), sy = divF(-d[R.ky], d[R.kz]);
-  R.Sx = sx;
-  R.Sy = sy;
+  // Sx and Sy from one call site of divF (a shader inlines each call's correction).
+  float S[2];
+  for (int k = 0; k < 2; ++k) S[k] = divF(-d[k == 0 ? R.kx : R.ky], d[R.kz]);
+  R.Sx = S[0];
+  R.Sy = S[1];
   return R;
 }
 

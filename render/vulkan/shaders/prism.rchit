@@ -18,5 +18,8 @@ void main() {
   pl.v = attr.uv.y;
   precise vec3 n = attr.ng;
   precise float len = lengthF(n);
-  pl.ng = len > 0.0 ? vec3(divF(n.x, len), divF(n.y, len), divF(n.z, len)) : vec3(0.0);
+  // One call site of divF for the three (each call inlines its correction).
+  vec3 ng = vec3(0.0);
+  for (int k = 0; k < 3 && len > 0.0; ++k) ng[k] = divF(n[k], len);
+  pl.ng = ng;
 }
