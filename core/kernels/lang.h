@@ -21,8 +21,9 @@
 // min, max and abs are GLSL's on both sides (for scalars: y < x ? y : x, as std::min);
 // dotD, crossD, dotF, crossF (and lengthD, lengthF) are glm's formulas, which GLSL's
 // built-ins need not follow; cbrtF is std::cbrt on the CPU and pow on the GPU. A float
-// quotient or square root is written divF(a, b) / sqrtF(x): correctly rounded on both
-// sides (GLSL's float `/` and sqrt are not, on every GPU). An
+// quotient or square root is written divF(a, b) / sqrtF(x) (rcpSqrtF(x) for
+// divF(1.0f, sqrtF(x))): correctly rounded on both sides (GLSL's float `/` and sqrt are
+// not, on every GPU). An
 // unsuffixed literal is a float in GLSL and a double in C++; glslang folds its conversion
 // to double from the literal's own double value, so in double expressions both sides use
 // the same constants. Float arithmetic takes the f suffix (1.0f), read as a float by both
