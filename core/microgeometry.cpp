@@ -12,10 +12,16 @@ struct MicroHeights {
   float raw(int i, int j) const { return mc.d_.raw(i, j, mc.f_); }
   float microAt(const dvec2& s) const { return mc.d_.microAtSample(s, mc.f_); }
   MicroVertex grid(int i, int j) const { return cache ? mc.gridInterior(i, j, *cache) : mc.gridInterior(i, j); }
+  glm::vec2 uv(int i, int j) const { return mc.d_.sampleToUV(i, j); }
 };
 inline float mcRaw(const MicroHeights& h, int i, int j) { return h.raw(i, j); }
 inline float mcMicroAt(const MicroHeights& h, const dvec2& s) { return h.microAt(s); }
-inline MicroVertex mcGridVertex(const MicroHeights& h, int i, int j) { return h.grid(i, j); }
+// Every grid point inside T through gridInterior (cached where a cache is given).
+inline bool mcGridCached(const MicroHeights& h, int i, int j, MicroVertex& v) {
+  v = h.grid(i, j);
+  return true;
+}
+inline glm::vec2 mcGridUV(const MicroHeights& h, int i, int j) { return h.uv(i, j); }
 
 MicroCells::MicroCells(const DisplacedTriangle& tri, const Displacement& disp, float f) : T_(tri), d_(disp), f_(f) {
   dvec2 S[3];

@@ -18,8 +18,9 @@
 //     header, which declares them):
 //       float mcRaw(McHeights h, int i, int j)          raw texel of sample (i, j)
 //       float mcMicroAt(McHeights h, dvec2 s)           Displacement::microAtSample
-//       McVertex mcGridVertex(McHeights h, int i, int j) a grid point inside T: mcGridInterior
-//                                                        (the CPU reuses cached ones)
+//       bool mcGridCached(McHeights h, int i, int j, out McVertex v)  a grid point inside T
+//                                     when the includer keeps it (the CPU's cache; GLSL: none)
+//       vec2 mcGridUV(McHeights h, int i, int j)        Displacement::sampleToUV
 // Every operation is OBLONG_PRECISE: no fused multiply-add in the shaders, so vertices
 // come out as the CPU computes them, which watertightness and parity rely on.
 #ifndef OBLONG_KERNELS_MICROCELLS_H
@@ -89,7 +90,8 @@ McPV g_mcBuf[2 * OBLONG_MC_POLY];
 #define OBLONG_MC_AT(buf, k) g_mcBuf[k]
 float mcRaw(McHeights h, int i, int j);
 float mcMicroAt(McHeights h, dvec2 s);
-McVertex mcGridVertex(McHeights h, int i, int j);
+bool mcGridCached(McHeights h, int i, int j, out McVertex v);
+vec2 mcGridUV(McHeights h, int i, int j);
 #endif
 
 OBLONG_FORCE_INLINE double mcOrient(OBLONG_IN(dvec2) a, OBLONG_IN(dvec2) b, OBLONG_IN(dvec2) p) {
@@ -262,37 +264,58 @@ OBLONG_FORCE_INLINE vec3 mcNormalize(OBLONG_IN(vec3) v) {
   return r;
 }
 
+// A vertex before its normal is normalised: P + h·N/|N| at uv (mcVertexAt). The two
+// kinds of vertex computed this way (on an edge of T, at a grid point inside it) meet in
+// mcWorld at one call site of mcVertexAt, so a shader inlines one normalisation.
+struct McPre {
+  vec3 P, N;
+  float h;
+  vec2 uv;
+};
+OBLONG_FORCE_INLINE McVertex mcVertexAt(OBLONG_IN(McPre) q) {
+  McVertex v;
+  OBLONG_PRECISE vec3 p = q.P + q.h * mcNormalize(q.N);
+  v.p = p;
+  v.uv = q.uv;
+  return v;
+}
+
 // The point of edge e at parameter t (canonical direction) with raw height `raw`.
-OBLONG_INLINE McVertex mcOnEdge(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, int e, double t, float raw) {
+OBLONG_INLINE McPre mcOnEdgePre(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, int e, double t, float raw) {
   int A = E.A[e], B = E.B[e];
   float tf = float(t);
   OBLONG_PRECISE float w = 1.0f - tf;
+  McPre q;
   OBLONG_PRECISE vec3 P = w * T.p[A] + tf * T.p[B];
   OBLONG_PRECISE vec3 N = w * T.n[A] + tf * T.n[B];
   OBLONG_PRECISE float h = T.scale * (raw + T.bias);
-  McVertex v;
-  OBLONG_PRECISE vec3 p = P + h * mcNormalize(N);
   OBLONG_PRECISE vec2 uv = w * T.t[A] + tf * T.t[B];
-  v.p = p;
-  v.uv = uv;
-  return v;
+  q.P = P;
+  q.N = N;
+  q.h = h;
+  q.uv = uv;
+  return q;
 }
 
 // A grid point not on any edge of T, at texture coordinates uv (Displacement::sampleToUV)
 // with raw height raw: T's barycentrics of its uv, T's P and N there.
-OBLONG_FORCE_INLINE McVertex mcGridInterior(OBLONG_IN(McTri) T, OBLONG_IN(vec2) uv, float raw) {
+OBLONG_FORCE_INLINE McPre mcGridPre(OBLONG_IN(McTri) T, OBLONG_IN(vec2) uv, float raw) {
   OBLONG_PRECISE vec2 q = uv - T.t[0];
   vec4 m = T.uvToBary;
   OBLONG_PRECISE vec2 b = vec2(m.x * q.x + m.z * q.y, m.y * q.x + m.w * q.y);
   OBLONG_PRECISE float w = 1.0f - b.x - b.y;
+  McPre r;
   OBLONG_PRECISE vec3 P = w * T.p[0] + b.x * T.p[1] + b.y * T.p[2];
   OBLONG_PRECISE vec3 N = w * T.n[0] + b.x * T.n[1] + b.y * T.n[2];
   OBLONG_PRECISE float h = T.scale * (raw + T.bias);
-  McVertex v;
-  OBLONG_PRECISE vec3 p = P + h * mcNormalize(N);
-  v.p = p;
-  v.uv = uv;
-  return v;
+  r.P = P;
+  r.N = N;
+  r.h = h;
+  r.uv = uv;
+  return r;
+}
+OBLONG_FORCE_INLINE McVertex mcGridInterior(OBLONG_IN(McTri) T, OBLONG_IN(vec2) uv, float raw) {
+  return mcVertexAt(mcGridPre(T, uv, raw));
 }
 
 // Raw height on grid line (type, c) at sample point s: linear between the line's samples.
@@ -340,6 +363,7 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
   int edge = -1;
   double t = 0.0;
   float raw = 0.0f;
+  bool grid = false;  // a grid point inside T
   if (v.kind == OBLONG_MC_CROSS) {
     edge = v.a;
     t = clamp(mcCrossParamRaw(E, v.a, v.lineType, v.lineC), 0.0, 1.0);  // a final vertex: on the segment
@@ -354,19 +378,24 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
         OBLONG_PRECISE dvec2 q = v.s - SA;
         OBLONG_PRECISE double u = (q.x * ab.x + q.y * ab.y) / (ab.x * ab.x + ab.y * ab.y);
         t = clamp(u, 0.0, 1.0);
-        raw = mcRaw(hs, v.a, v.b);
         edge = e;
       }
-    if (edge < 0) return mcGridVertex(hs, v.a, v.b);
+    if (edge < 0) {
+      McVertex c;
+      if (mcGridCached(hs, v.a, v.b, c)) return c;
+      grid = true;
+    }
+    raw = mcRaw(hs, v.a, v.b);
   }
   // T's vertices from one call site (in a shader each call site is a copy of the
   // height lookups it makes).
-  if (v.kind == OBLONG_MC_TVERTEX || t == 0.0 || t == 1.0) {
+  if (!grid && (v.kind == OBLONG_MC_TVERTEX || t == 0.0 || t == 1.0)) {
     int k = v.a;
     if (v.kind != OBLONG_MC_TVERTEX) k = t == 0.0 ? E.A[edge] : E.B[edge];
     return mcTVertex(T, E, hs, k);
   }
-  return mcOnEdge(T, E, edge, t, raw);
+  McPre q = grid ? mcGridPre(T, mcGridUV(hs, v.a, v.b), raw) : mcOnEdgePre(T, E, edge, t, raw);
+  return mcVertexAt(q);
 }
 
 OBLONG_KERNELS_END

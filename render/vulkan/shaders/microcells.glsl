@@ -49,7 +49,12 @@ float microAtSample(dvec2 s) { return dispMicroAt(0, s, g_mesh.scale, g_mesh.bia
 
 float mcRaw(McHeights h, int i, int j) { return mapAt(i, j); }
 float mcMicroAt(McHeights h, dvec2 s) { return microAtSample(s); }
-McVertex mcGridVertex(McHeights h, int i, int j) { return mcGridInterior(TRI.mc, sampleToUV(i, j), mapAt(i, j)); }
+bool mcGridCached(McHeights h, int i, int j, out McVertex v) {  // no cache: mcWorld computes it
+  v.p = vec3(0.0);
+  v.uv = vec2(0.0);
+  return false;
+}
+vec2 mcGridUV(McHeights h, int i, int j) { return sampleToUV(i, j); }
 
 void testMicro(McVertex v0, McVertex v1, McVertex v2);  // traversal.glsl
 
