@@ -214,8 +214,9 @@ OBLONG_KERNELS_BEGIN
 // quotient's; a root is never one). The comparisons are exact in 32-bit integers: with
 // r = R·2^e (R its integer significand, e its ulp's exponent) and B = M·2^f, A − r·B is an
 // integer D in units of 2^(e+f−k) (a root's A − r²: of 2^(2e−2k)), k = 1, or 2 where r is
-// a power of two; within 4 ulp |D| < 2^30, so its 32-bit wrap-around value is D itself,
-// and the midpoints are small integers. No double: a GPU without shaderFloat64 runs it,
+// a power of two; within 4 ulp |D| <= (8R + 16)·2^(2k) < 2^31 for a root and 2^(k+26) for
+// a quotient, so its 32-bit wrap-around value is D itself; the midpoints are small
+// integers. No double: a GPU without shaderFloat64 runs it,
 // one with FP64 at 1/64 rate does not pay for it. divF and sqrtF call it on the GPU; C++
 // runs it in the tests, against IEEE's quotients and roots.
 // x > 0 finite as m·2^e, m in [2^23, 2^24) (a subnormal's significand normalised).
