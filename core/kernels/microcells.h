@@ -264,17 +264,27 @@ OBLONG_FORCE_INLINE vec3 mcNormalize(OBLONG_IN(vec3) v) {
   return r;
 }
 
-// A vertex before its normal is normalised: P + h·N/|N| at uv (mcVertexAt). The two
-// kinds of vertex computed this way (on an edge of T, at a grid point inside it) meet in
-// mcWorld at one call site of mcVertexAt, so a shader inlines one normalisation.
+// A vertex before its normal is normalised: P + h·N/|N| at uv with h from the raw height
+// (mcVertexAt). The two kinds of vertex computed this way (on an edge of T, at a grid
+// point inside it) meet in mcWorld at one call site of mcVertexAt, so a shader inlines
+// one normalisation.
 struct McPre {
   vec3 P, N;
-  float h;
   vec2 uv;
+  float raw;
 };
-OBLONG_FORCE_INLINE McVertex mcVertexAt(OBLONG_IN(McPre) q) {
+OBLONG_INLINE McPre mcPre(OBLONG_IN(vec3) P, OBLONG_IN(vec3) N, OBLONG_IN(vec2) uv, float raw) {
+  McPre q;
+  q.P = P;
+  q.N = N;
+  q.uv = uv;
+  q.raw = raw;
+  return q;
+}
+OBLONG_FORCE_INLINE McVertex mcVertexAt(OBLONG_IN(McTri) T, OBLONG_IN(McPre) q) {
   McVertex v;
-  OBLONG_PRECISE vec3 p = q.P + q.h * mcNormalize(q.N);
+  OBLONG_PRECISE float h = T.scale * (q.raw + T.bias);
+  OBLONG_PRECISE vec3 p = q.P + h * mcNormalize(q.N);
   v.p = p;
   v.uv = q.uv;
   return v;
@@ -285,16 +295,10 @@ OBLONG_INLINE McPre mcOnEdgePre(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, int e,
   int A = E.A[e], B = E.B[e];
   float tf = float(t);
   OBLONG_PRECISE float w = 1.0f - tf;
-  McPre q;
   OBLONG_PRECISE vec3 P = w * T.p[A] + tf * T.p[B];
   OBLONG_PRECISE vec3 N = w * T.n[A] + tf * T.n[B];
-  OBLONG_PRECISE float h = T.scale * (raw + T.bias);
   OBLONG_PRECISE vec2 uv = w * T.t[A] + tf * T.t[B];
-  q.P = P;
-  q.N = N;
-  q.h = h;
-  q.uv = uv;
-  return q;
+  return mcPre(P, N, uv, raw);
 }
 
 // A grid point not on any edge of T, at texture coordinates uv (Displacement::sampleToUV)
@@ -304,18 +308,12 @@ OBLONG_FORCE_INLINE McPre mcGridPre(OBLONG_IN(McTri) T, OBLONG_IN(vec2) uv, floa
   vec4 m = T.uvToBary;
   OBLONG_PRECISE vec2 b = vec2(m.x * q.x + m.z * q.y, m.y * q.x + m.w * q.y);
   OBLONG_PRECISE float w = 1.0f - b.x - b.y;
-  McPre r;
   OBLONG_PRECISE vec3 P = w * T.p[0] + b.x * T.p[1] + b.y * T.p[2];
   OBLONG_PRECISE vec3 N = w * T.n[0] + b.x * T.n[1] + b.y * T.n[2];
-  OBLONG_PRECISE float h = T.scale * (raw + T.bias);
-  r.P = P;
-  r.N = N;
-  r.h = h;
-  r.uv = uv;
-  return r;
+  return mcPre(P, N, uv, raw);
 }
 OBLONG_FORCE_INLINE McVertex mcGridInterior(OBLONG_IN(McTri) T, OBLONG_IN(vec2) uv, float raw) {
-  return mcVertexAt(mcGridPre(T, uv, raw));
+  return mcVertexAt(T, mcGridPre(T, uv, raw));
 }
 
 // Raw height on grid line (type, c) at sample point s: linear between the line's samples.
@@ -395,7 +393,7 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
     return mcTVertex(T, E, hs, k);
   }
   McPre q = grid ? mcGridPre(T, mcGridUV(hs, v.a, v.b), raw) : mcOnEdgePre(T, E, edge, t, raw);
-  return mcVertexAt(q);
+  return mcVertexAt(T, q);
 }
 
 OBLONG_KERNELS_END
