@@ -64,12 +64,14 @@
 #define OBLONG_RP_STAT_LEAF 8
 #define OBLONG_RP_STAT_BAD_INVERSION 9
 
-// A curve point setupCurve leaves to pieceEnd (an end of the ray inside the prism, a
-// turning point): its t is known, and pad.x (negative, which a made point's pad never is)
-// says how to make it.
-#define OBLONG_RP_PENDING_CLAIM (-1.0)   // claimed from uv (on the chord between the crossings), else inverted
-#define OBLONG_RP_PENDING_INVERT (-2.0)  // an end: inverted
+// A curve point to be made at pieceEnd's one call site of the claim and the inverter (an
+// end setupCurve leaves pending, a clipped end, a split's point, the march's stop): its t
+// is known, and pad.x (negative, which a made point's pad never is) says how to make it.
+#define OBLONG_RP_PENDING_CLAIM (-1.0)   // claimed from uv (on the chord between two points), else inverted
+#define OBLONG_RP_PENDING_INVERT (-2.0)  // inverted
 #define OBLONG_RP_PENDING_TURN (-3.0)    // a turning point: inverted
+#define OBLONG_RP_PENDING_CROSSING (-5.0)  // claimed at known prism coordinates (uv: b, pad.y: s)
+#define OBLONG_RP_PENDING_HIT (-6.0)     // claimed from uv at the closest hit, whatever its pad
 // A stack entry that is a box: a.pad.x holds this, a.uv and b.uv its local cells' corners
 // (clo, chi: integers, exact in double), a.t and b.t its ray interval.
 #define OBLONG_RP_BOX_ENTRY (-4.0)

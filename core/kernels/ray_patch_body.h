@@ -86,16 +86,30 @@ bool claimPoint(double t, OBLONG_IN(dvec2) b, double s, OBLONG_OUT(CurvePoint) o
   return makePoint(g_F, g_claim, g_O, g_D, t, b, s, outp);
 }
 
-// Prism coordinates (b, s) for the curve point at t: by the inverter (invert), or claimed
-// without it from uv g near the point (on the chord between two curve points, chordUv): s
-// by least squares and one Newton step in double (newtonClaim). Either way makePoint's
-// residual bounds the point's error.
-bool coordsAt(double t, OBLONG_IN(dvec2) g, bool invert, OBLONG_OUT(dvec2) b, OBLONG_OUT(double) s) {
-  b = dvec2(0.0);
-  s = 0.0;
-  if (!invert) return newtonClaim(g_F, g_O, g_D, t, frameBary(g_F, g), b, s);
+// A point to be made: its t, a uv to start from and how to make it (pad.x, negative,
+// which a made point's pad never is: OBLONG_RP_PENDING_*).
+bool pending(OBLONG_IN(CurvePoint) p) { return p.pad.x < 0.0; }
+CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
+  CurvePoint p;
+  p.t = t;
+  p.uv = g;
+  p.pad = dvec2(how, 0.0);
+  return p;
+}
+
+// Prism coordinates (b, s) for the curve point p.t, made as its pad.x says (a pending
+// point): by the inverter (invert); at prism coordinates already known (a crossing of the
+// prism: b = p.uv, s = p.pad.y); or claimed without inversion from uv p.uv near the point
+// (on the chord between two curve points, chordUv; at the closest hit): s by least
+// squares and one Newton step in double (newtonClaim). Either way makePoint's residual
+// bounds the point's error.
+bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(dvec2) b, OBLONG_OUT(double) s) {
+  b = p.uv;
+  s = p.pad.y;
+  if (!invert && p.pad.x == OBLONG_RP_PENDING_CROSSING) return true;
+  if (!invert) return newtonClaim(g_F, g_O, g_D, p.t, frameBary(g_F, p.uv), b, s);
   ++g_inversions;
-  OBLONG_PRECISE dvec3 X = g_O + t * g_D;
+  OBLONG_PRECISE dvec3 X = g_O + p.t * g_D;
   vec2 bary;
   float h;
   OBLONG_HOOK(rpInvert)(vec3(X), bary, h);
@@ -106,26 +120,33 @@ bool coordsAt(double t, OBLONG_IN(dvec2) g, bool invert, OBLONG_OUT(dvec2) b, OB
   return true;
 }
 
-// The curve point at t: claimed near g first when `claim` (kept only when its pad is at
-// most OBLONG_TRAV_CLAIM_PAD), else or then by inversion. One call site of the claim's
-// residual (makePoint) for both.
-bool curvePointAt(double t, OBLONG_IN(dvec2) g, bool claim, OBLONG_OUT(CurvePoint) outp) {
-  outp.t = t;
+// The curve point for pending point p (OBLONG_RP_PENDING_*): a claim first where p says
+// so (near uv when PENDING_CLAIM, kept only when its pad is at most OBLONG_TRAV_CLAIM_PAD;
+// at the closest hit whatever its pad; at a crossing's prism coordinates), else or then
+// by inversion (never for the hit's and the crossings' claims). The one call site of the
+// claim's residual (makePoint) and of the inverter: pieceEnd's loop.
+bool curvePointAt(OBLONG_IN(CurvePoint) p, OBLONG_OUT(CurvePoint) outp) {
+  double how = p.pad.x;
+  bool claim = how == OBLONG_RP_PENDING_CLAIM || how == OBLONG_RP_PENDING_HIT || how == OBLONG_RP_PENDING_CROSSING;
+  bool invert = how != OBLONG_RP_PENDING_HIT && how != OBLONG_RP_PENDING_CROSSING;
+  outp.t = p.t;
   outp.uv = dvec2(0.0);
   outp.pad = dvec2(0.0);
-  for (int at = claim ? 0 : 1; at < 2; ++at) {
+  for (int at = claim ? 0 : 1; at < (invert ? 2 : 1); ++at) {
     dvec2 b;
     double s;
-    if (coordsAt(t, g, at == 1, b, s) && claimPoint(t, b, s, outp) &&
-        (at == 1 || outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD))
+    if (coordsAt(p, at == 1, b, s) && makePoint(g_F, g_claim, g_O, g_D, p.t, b, s, outp) &&
+        (at == 1 || how != OBLONG_RP_PENDING_CLAIM || outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD))
       return true;
   }
-  OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BAD_INVERSION);
+  if (invert) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BAD_INVERSION);
   return false;
 }
 
-// The curve point at t by inversion.
-bool invertAt(double t, OBLONG_OUT(CurvePoint) outp) { return curvePointAt(t, dvec2(0.0), false, outp); }
+// The curve point at t by inversion (the CPU's SplitContext::pointAt).
+bool invertAt(double t, OBLONG_OUT(CurvePoint) outp) {
+  return curvePointAt(pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT), outp);
+}
 
 // The curve point on {axis = c}, unique, strictly between the piece's ends (closed form
 // on ψ, paper Eq. 3-4; the splitters' SplitContext::crossing).
@@ -150,23 +171,6 @@ bool crossingAt(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, do
     ++found;
   }
   return found == 1;
-}
-
-// The curve point at t from the closest hit instead of an inversion: the hit's texture
-// position gives T's barycentrics, from which one Newton step in double claims (b, s)
-// (newtonClaim: the hit lies on a flat micro-triangle, off the displacement line through
-// its barycentrics by the micro-surface's bulge); makePoint's residual bounds the error
-// as for any claim.
-bool pointFromHit(double t, OBLONG_OUT(CurvePoint) outp) {
-  outp.t = t;
-  outp.uv = dvec2(0.0);
-  outp.pad = dvec2(0.0);
-  if (!OBLONG_HOOK(rpHitFound)()) return false;
-  OBLONG_PRECISE dvec2 loc = OBLONG_HOOK(rpToSample)(OBLONG_HOOK(rpHitUV)()) - dvec2(g_origin);
-  dvec2 nb;
-  double ns;
-  if (!newtonClaim(g_F, g_O, g_D, t, frameBary(g_F, loc), nb, ns)) return false;
-  return claimPoint(t, nb, ns, outp);
 }
 
 // ---- boxes ---------------------------------------------------------------------------------
@@ -347,24 +351,24 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   g_mStop = dvec2(0.0);
 }
 
-// False when no cell of the marched piece can hold a better hit. The stop's point is
-// claimed from the hit; where makePoint refuses the claim the march runs on without a
-// stop (a saving only, so no inversion is spent on it: none was needed on the shipped and
-// paper scenes once pointFromHit took its Newton step).
-bool setStop() {
-  g_mStopSet = true;
-  double tStar = bestLimit();
-  if (tStar <= g_ma.t) return false;
-  CurvePoint m;
-  if (tStar < g_mb.t && pointFromHit(tStar, m))
-    for (int k = 0; k < 2; ++k)
-      if (g_mCertain[k]) {
-        OBLONG_PRECISE double margin = m.pad[k] + g_ma.pad[k] + g_mb.pad[k];
-        int sg = k == g_mAx ? g_mSa : g_mSm;
-        g_mStop[k] = sg > 0 ? m.uv[k] + margin : m.uv[k] - margin;
-        g_mStopAxis[k] = true;
-      }
-  return true;
+// The stop's point is claimed from the hit at the best hit's limit t* (g_mStopT), in
+// pieceEnd's loop; where makePoint refuses the claim the march runs on without a stop (a
+// saving only, so no inversion is spent on it: none was needed on the shipped and paper
+// scenes once the hit's claim took its Newton step).
+// The march's stop is claimed at the closest hit instead of by an inversion: the hit's
+// texture position gives T's barycentrics, from which one Newton step in double claims
+// (b, s) (newtonClaim: the hit lies on a flat micro-triangle, off the displacement line
+// through its barycentrics by the micro-surface's bulge); makePoint's residual bounds
+// the error as for any claim (OBLONG_RP_PENDING_HIT, made in pieceEnd's loop).
+double g_mStopT;
+void stopAt(OBLONG_IN(CurvePoint) m) {
+  for (int k = 0; k < 2; ++k)
+    if (g_mCertain[k]) {
+      OBLONG_PRECISE double margin = m.pad[k] + g_ma.pad[k] + g_mb.pad[k];
+      int sg = k == g_mAx ? g_mSa : g_mSm;
+      g_mStop[k] = sg > 0 ? m.uv[k] + margin : m.uv[k] - margin;
+      g_mStopAxis[k] = true;
+    }
 }
 bool pastStop(int a, int k) {
   int sg = a == g_mAx ? g_mSa : g_mSm;
@@ -402,12 +406,13 @@ bool mayCross(int k, int j) {
   return abs(v) <= bound;
 }
 
-// The next cell of the current generator; false when it is exhausted.
-bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
+// The next cell of the current generator: 1 a cell, 2 the march's stop point is wanted
+// first (at g_mStopT), 0 the generator is exhausted.
+int nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
   ci = 0;
   cj = 0;
   if (g_gen == 1) {
-    if (g_gsy > 0 ? g_gj > g_gHi.y : g_gj < g_gLo.y) return false;
+    if (g_gsy > 0 ? g_gj > g_gHi.y : g_gj < g_gLo.y) return 0;
     ci = g_gi;
     cj = g_gj;
     g_gi += g_gsx;
@@ -415,20 +420,25 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
       g_gi = g_gsx > 0 ? g_gLo.x : g_gHi.x;
       g_gj += g_gsy;
     }
-    return true;
+    return 1;
   }
   int ax = g_mAx, mi = 1 - ax;
   for (;;) {
-    if (!g_mCol && (g_mSa > 0 ? g_mK > g_mRHi[ax] : g_mK < g_mRLo[ax])) return false;
-    // The first hit found bounds the march (setStop, from this one call site).
-    if (!g_mStopSet && OBLONG_HOOK(rpHitFound)() && !setStop()) {
-      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
-      return false;
+    if (!g_mCol && (g_mSa > 0 ? g_mK > g_mRHi[ax] : g_mK < g_mRLo[ax])) return 0;
+    // The first hit found bounds the march: no cell past t* can hold a better hit.
+    if (!g_mStopSet && OBLONG_HOOK(rpHitFound)()) {
+      g_mStopSet = true;
+      g_mStopT = bestLimit();
+      if (g_mStopT <= g_ma.t) {
+        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
+        return 0;
+      }
+      if (g_mStopT < g_mb.t) return 2;
     }
     if (!g_mCol) {
       if (pastStop(ax, g_mK)) {
         OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_MARCH_STOP);
-        return false;
+        return 0;
       }
       // The column's seeds; none: no cell of the piece is left.
       int lo = g_mPLo, hi = g_mPHi;
@@ -441,7 +451,7 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
         lo = g_mRLo[mi];
         hi = g_mRHi[mi];
       }
-      if (lo > hi) return false;
+      if (lo > hi) return 0;
       g_mJ0 = lo;
       g_mJ1 = hi;
       g_mJ = g_mSm > 0 ? lo : hi;
@@ -471,9 +481,9 @@ bool nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
     ci = ax == 0 ? g_mK : j;
     cj = ax == 0 ? j : g_mK;
     if (ci < g_gLo.x || ci > g_gHi.x || cj < g_gLo.y || cj > g_gHi.y) continue;  // outside T's cells
-    return true;
+    return 1;
   }
-  return false;
+  return 0;
 }
 
 // ---- pieces and boxes ----------------------------------------------------------------------
@@ -496,14 +506,6 @@ void wideLeaf(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   pushBox(clo, chi, a.t, min(b.t, bestLimit()));
 }
 
-bool pending(OBLONG_IN(CurvePoint) p) { return p.pad.x < 0.0; }
-CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
-  CurvePoint p;
-  p.t = t;
-  p.uv = g;
-  p.pad = dvec2(how, 0.0);
-  return p;
-}
 
 // A piece popped from the stack, before its box: 0 = nothing to do; 1 = box-test cells
 // [clo, chi] over [t0, t1] first (rpLoop), then pieceEnd; 2 = pieceEnd without a box.
@@ -530,12 +532,15 @@ int pieceBegin(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, OBLONG_OUT(ivec
 }
 
 // The rest of a piece after pieceBegin (and its box, which clipped [t0, t1]).
+// leaf = 3: no piece, the march's stop point (nextCell), made at the same call site.
 void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, double t1, int leaf) {
-  bool pendA = pending(a), pend = pendA || pending(b);
+  bool stop = leaf == 3;
+  bool pendA = !stop && pending(a), pend = pendA || (!stop && pending(b));
   OBLONG_PRECISE double minGain = 0.0;
   // leaf, when not split: 1 = too small to split, 2 = marched at a stack overflow (set
   // below; one call site of the march).
-  if (!pend && leaf == 0) {
+  if (stop) leaf = 0;
+  if (!pend && !stop && leaf == 0) {
     // The clipped ends are worth a new point (Fig. 5a: their projections can give a much
     // smaller rectangle) when they gain this much.
     OBLONG_PRECISE dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
@@ -544,22 +549,22 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
   }
   // Up to three points at one call site: a pending end (e = -1), or the clipped ends
   // (inversion during traversal) and then the split's point when the splitter asks for
-  // the curve point at a t.
-  CurvePoint m;
+  // the curve point at a t; or the march's stop (e = 3).
+  CurvePoint m = a;
   bool ok = false;
-  for (int e = pend ? -1 : (g_inversionInTraversal ? 0 : 2); leaf == 0 && e < (pend ? 0 : 3); ++e) {
-    bool need = true, claim = e < 2;
-    double t = 0.0;  // set on every path that reads it; GCC cannot tell
-    dvec2 g = dvec2(0.0);
+  int e0 = stop ? 3 : (pend ? -1 : (g_inversionInTraversal ? 0 : 2)), e1 = stop ? 4 : (pend ? 0 : 3);
+  for (int e = e0; leaf == 0 && e < e1; ++e) {
+    bool need = true;
+    CurvePoint p = a;  // the point to make, pending
     if (e < 0) {
-      CurvePoint p = pendA ? a : b;
-      t = p.t;
-      g = p.uv;
-      claim = p.pad.x == OBLONG_RP_PENDING_CLAIM;
+      p = pendA ? a : b;
     } else if (e < 2) {
       need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
-      t = e == 0 ? t0 : t1;
-      g = chordUv(a, b, t);
+      double t = e == 0 ? t0 : t1;
+      p = pendingPoint(t, chordUv(a, b, t), OBLONG_RP_PENDING_CLAIM);
+    } else if (e == 3) {
+      p = pendingPoint(g_mStopT, OBLONG_HOOK(rpToSample)(OBLONG_HOOK(rpHitUV)()) - dvec2(g_origin),
+                       OBLONG_RP_PENDING_HIT);
     } else {
       if (pieceSmall(a, b)) {
         leaf = 1;
@@ -570,14 +575,16 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
         leaf = 2;
         break;
       }
+      double t = 0.0;
       int r = OBLONG_HOOK(rpSplit)(a, b, m, t);
       ok = r == 1;
       need = r == 2;
+      p = pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT);
     }
     CurvePoint q;
-    if (need && curvePointAt(t, g, claim, q)) {
+    if (need && curvePointAt(p, q)) {
       if (e < 0) {
-        if ((pendA ? a : b).pad.x == OBLONG_RP_PENDING_TURN) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);
+        if (p.pad.x == OBLONG_RP_PENDING_TURN) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);
         if (pendA) a = q;
         else b = q;
         ok = true;
@@ -588,6 +595,10 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
         ok = true;
       }
     }
+  }
+  if (stop) {
+    if (ok) stopAt(m);
+    return;
   }
   if (leaf != 0) {
     if (leaf == 1 && g_wideEps) wideLeaf(a, b);
@@ -662,11 +673,12 @@ void boxEnd(ivec2 clo, ivec2 chi, double t0, double t1) {
 // the lanes of a warp test their boxes together whatever their steps).
 void rpLoop() {
   for (;;) {
-    int kind = 0;  // 1: a cell of the generator, 2: a box range, 3: a piece
+    int kind = 0;  // 1: a cell of the generator, 2: a box range, 3: a piece, 4: the march's stop
     ivec2 clo = ivec2(0), chi = ivec2(0);
     if (g_gen != 0) {
-      if (nextCell(clo.x, clo.y)) kind = 1;
-      else g_gen = 0;
+      int r = nextCell(clo.x, clo.y);
+      if (r == 0) g_gen = 0;
+      else kind = r == 1 ? 1 : 4;
     }
     RpEntry e;
     e.a = g_ma;  // e is read only for kinds 2 and 3; set so that no compiler sees it read unset
@@ -689,8 +701,13 @@ void rpLoop() {
       clo = ivec2(e.a.uv);
       chi = ivec2(e.b.uv);
       go = boxBegin(clo, chi, e.a.t, e.b.t, t0, t1);
-    } else {
+    } else if (kind == 3) {
       go = pieceBegin(e.a, e.b, clo, chi, t0, t1, leaf);
+    } else {
+      t0 = 0.0;
+      t1 = 0.0;
+      leaf = 3;
+      go = 2;
     }
     if (go == 0) continue;
     if (go == 1) {  // the box step
