@@ -535,7 +535,7 @@ int pieceBegin(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, OBLONG_OUT(ivec
 // leaf = 3: no piece, the march's stop point (nextCell), made at the same call site.
 void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, double t1, int leaf) {
   bool stop = leaf == 3;
-  bool pendA = !stop && pending(a), pend = pendA || (!stop && pending(b));
+  bool pendA = !stop && pending(a), pendB = !stop && pending(b), pend = pendA || pendB;
   OBLONG_PRECISE double minGain = 0.0;
   // leaf, when not split: 1 = too small to split, 2 = marched at a stack overflow (set
   // below; one call site of the march).
@@ -547,17 +547,18 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
     OBLONG_PRECISE double gainDt = b.t - a.t;
     minGain = max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
   }
-  // Up to three points at one call site: a pending end (e = -1), or the clipped ends
-  // (inversion during traversal) and then the split's point when the splitter asks for
-  // the curve point at a t; or the march's stop (e = 3).
+  // Up to three points at one call site: the pending ends (e = -2, -1), or the clipped
+  // ends (inversion during traversal) and then the split's point when the splitter asks
+  // for the curve point at a t; or the march's stop (e = 3).
   CurvePoint m = a;
-  bool ok = false;
-  int e0 = stop ? 3 : (pend ? -1 : (g_inversionInTraversal ? 0 : 2)), e1 = stop ? 4 : (pend ? 0 : 3);
-  for (int e = e0; leaf == 0 && e < e1; ++e) {
+  bool ok = false, failed = false;
+  int e0 = stop ? 3 : (pend ? -2 : (g_inversionInTraversal ? 0 : 2)), e1 = stop ? 4 : (pend ? 0 : 3);
+  for (int e = e0; leaf == 0 && !failed && e < e1; ++e) {
     bool need = true;
     CurvePoint p = a;  // the point to make, pending
     if (e < 0) {
-      p = pendA ? a : b;
+      p = e == -2 ? a : b;
+      need = e == -2 ? pendA : pendB;
     } else if (e < 2) {
       need = e == 0 ? t0 > a.t + minGain : t1 < b.t - minGain;
       double t = e == 0 ? t0 : t1;
@@ -582,12 +583,13 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
       p = pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT);
     }
     CurvePoint q;
-    if (need && curvePointAt(p, q)) {
+    bool made = need && curvePointAt(p, q);
+    if (need && !made && e < 0) failed = true;
+    if (made) {
       if (e < 0) {
         if (p.pad.x == OBLONG_RP_PENDING_TURN) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);
-        if (pendA) a = q;
+        if (e == -2) a = q;
         else b = q;
-        ok = true;
       } else if (e == 0) a = q;
       else if (e == 1) b = q;
       else {
@@ -606,13 +608,13 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
     return;
   }
   if (pend) {
-    if (!ok) {  // no point: this piece's interval by boxes over all of T's cells
+    if (failed) {  // no point: this piece's interval by boxes over all of T's cells
       OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PIECE);
       pushBox(g_cellLo, g_cellHi, a.t, min(b.t, bestLimit()));
       return;
     }
     // The piece below starts where this one ends (setupCurve pushed them in order).
-    if (!pendA && g_sp > 0 && !isBox(g_st[g_sp - 1]) && pending(g_st[g_sp - 1].a) && g_st[g_sp - 1].a.t == b.t)
+    if (pendB && g_sp > 0 && !isBox(g_st[g_sp - 1]) && pending(g_st[g_sp - 1].a) && g_st[g_sp - 1].a.t == b.t)
       g_st[g_sp - 1].a = b;
     pushPiece(a, b);
     return;
@@ -770,28 +772,24 @@ int setupCurve() {
   if (!(tIn <= tOut)) return 0;
   g_psi = psiMake(g_F, g_O, g_D);
   g_dvd = dirLocal();
-  // 2. Monotone pieces, between ψ's turning points. Their ends on the prism are the
-  // crossings' claims; an end inside the prism (where the ray starts or ends) and the
-  // turning points are left pending, made by pieceEnd when their piece is popped.
+  // 2. Monotone pieces, between ψ's turning points, all their ends left pending, made
+  // by pieceEnd when their piece is popped: the crossings' claims at their prism
+  // coordinates; an end inside the prism (where the ray starts or ends) claimed near the
+  // chord between the crossings, else inverted; the turning points inverted.
   double ts[4];
   int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, ts);
   CurvePoint pts[6];
-  CurvePoint ends[2];  // the crossings' points (one call site of the claim)
-  bool ok[2];
   for (int k = 0; k < 2; ++k) {
     Crossing c = k == 0 ? first : last;
-    ok[k] = claimPoint(c.t, c.bary, c.s, ends[k]);
-  }
-  for (int k = 0; k < 2; ++k) {
     double t = k == 0 ? tIn : tOut;
     CurvePoint p;
-    if (t == (k == 0 ? first.t : last.t)) {
-      if (!ok[k]) return 1;
-      p = ends[k];
-    } else if (ok[0] && ok[1]) {
-      p = pendingPoint(t, chordUv(ends[0], ends[1], t), OBLONG_RP_PENDING_CLAIM);
-    } else {
-      p = pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT);
+    if (t == c.t) {
+      p = pendingPoint(t, c.bary, OBLONG_RP_PENDING_CROSSING);
+      p.pad.y = c.s;
+    } else {  // the chord between the crossings' uv (a claim's uv is frameLocal of its b)
+      CurvePoint e0 = pendingPoint(first.t, frameLocal(g_F, first.bary), 0.0);
+      CurvePoint e1 = pendingPoint(last.t, frameLocal(g_F, last.bary), 0.0);
+      p = pendingPoint(t, chordUv(e0, e1, t), OBLONG_RP_PENDING_CLAIM);
     }
     pts[k == 0 ? 0 : ns + 1] = p;
   }
