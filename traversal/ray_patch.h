@@ -210,7 +210,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
     bary = r.bary;
     h = r.h;
   }
-  int rpSplit(const shared::CurvePoint& a, const shared::CurvePoint& b, shared::CurvePoint& m, double&) {
+  int rpSplit(const shared::CurvePoint& a, const shared::CurvePoint& b, int&, shared::CurvePoint& m, double&) {
     CurvePiece p, front, back;
     static_cast<shared::CurvePoint&>(p.a) = a;
     static_cast<shared::CurvePoint&>(p.b) = b;

@@ -7,8 +7,10 @@
 //      the uv of its ends; a ray starting (or ending) inside gets its end's uv from a point
 //      claimed between the crossings (curvePointAt), else by inversion.
 //   2. Split [tIn, tOut] where the curve may turn (ψ's turning points): monotone pieces.
-//      The ends inside and the turning points are made when their piece is first popped,
-//      at pieceEnd's one call site of the claim and of the inverter.
+//      Their ends (the crossings' claims, the ends inside, the turning points) are made
+//      when their piece is first popped, at pieceEnd's one call site of the claim and of
+//      the inverter, where every curve point is made (a split's, a clipped end's, the
+//      march's stop).
 //   3. A fixed-size stack of pieces, front to back. A piece whose rectangle is at most
 //      `marchingScale` texels is marched; otherwise its rectangle, dilated by ε and snapped
 //      outward to whole cells, is bounded (range query + interval arithmetic), the ray is
@@ -32,8 +34,10 @@
 //   float rpRaw(int I, int J)                  a texel at the ray's level of detail
 //   int   rpCellMicro(int I, int J)            tests cell (I, J)'s micro-triangles; how many
 //   void  rpInvert(vec3 X, out vec2 bary, out float h)   the inverter
-//   int   rpSplit(CurvePoint a, CurvePoint b, out CurvePoint m, out double t)  the splitter:
-//         1: m splits the piece; 2: invert at t for it; 0: no split
+//   int   rpSplit(CurvePoint a, CurvePoint b, inout int line, out CurvePoint m, out double t)
+//         the splitter: 1: m splits the piece; 2: invert at t for it; 3: claim m, a pending
+//         crossing (OBLONG_RP_PENDING_CROSSING) of its cut number `line` (from 0), for
+//         it; where that claim is refused, pieceEnd asks again with line + 1; 0: no split
 //   bool  rpHitFound(); float rpHitT(); dvec2 rpHitUV()  the closest hit and its uv
 //   dvec2 rpToSample(dvec2 uv)                 Displacement::toSample
 //   void  rpBoxOverRect(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi)  the box over

@@ -80,12 +80,6 @@ double bestLimit() {
 }
 dvec2 dirLocal() { return approxDirLocal(g_F, g_N13, g_D); }
 
-// A curve point from prism coordinates (b, s) claimed to be the projection of the ray
-// point at t (core/kernels/curve_point.h: the residual bounds its error).
-bool claimPoint(double t, OBLONG_IN(dvec2) b, double s, OBLONG_OUT(CurvePoint) outp) {
-  return makePoint(g_F, g_claim, g_O, g_D, t, b, s, outp);
-}
-
 // A point to be made: its t, a uv to start from and how to make it (pad.x, negative,
 // which a made point's pad never is: OBLONG_RP_PENDING_*).
 bool pending(OBLONG_IN(CurvePoint) p) { return p.pad.x < 0.0; }
@@ -148,9 +142,12 @@ bool invertAt(double t, OBLONG_OUT(CurvePoint) outp) {
   return curvePointAt(pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT), outp);
 }
 
-// The curve point on {axis = c}, unique, strictly between the piece's ends (closed form
-// on ψ, paper Eq. 3-4; the splitters' SplitContext::crossing).
-bool crossingAt(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, double c, OBLONG_OUT(CurvePoint) outp) {
+// The curve's crossing of {axis = c} strictly between the piece's ends (closed form on
+// ψ, paper Eq. 3-4; the splitters' SplitContext::crossing), to be claimed at its prism
+// coordinates: the one root of ψ on the line within the piece's padded rectangle whose ray
+// parameter lies between the ends' (the piece is monotone: it crosses the line once).
+// False unless exactly one root qualifies.
+bool crossingOn(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, double c, OBLONG_OUT(CurvePoint) outp) {
   outp = pa;
   double q2, q1, q0, w[2], rp[2];
   psiOnLine(g_psi, axis, c, q2, q1, q0);
@@ -165,12 +162,18 @@ bool crossingAt(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, do
     double t, s;
     if (!rayParamAt(g_F, g_O, g_D, uv, t, s)) continue;
     if (!(t > pa.t && t < pb.t)) continue;
-    CurvePoint cp;
-    if (!claimPoint(t, frameBary(g_F, uv), s, cp)) continue;
-    outp = cp;
+    outp = pendingPoint(t, frameBary(g_F, uv), OBLONG_RP_PENDING_CROSSING);
+    outp.pad.y = s;
     ++found;
   }
   return found == 1;
+}
+// That crossing made (the CPU's SplitContext::crossing; the shader's splitter leaves it
+// pending for pieceEnd's loop).
+bool crossingAt(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, double c, OBLONG_OUT(CurvePoint) outp) {
+  CurvePoint p;
+  outp = pa;
+  return crossingOn(pa, pb, axis, c, p) && curvePointAt(p, outp);
 }
 
 // ---- boxes ---------------------------------------------------------------------------------
@@ -552,9 +555,11 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
   // for the curve point at a t; or the march's stop (e = 3).
   CurvePoint m = a;
   bool ok = false, failed = false;
+  int line = 0;  // the splitter's first choice of cut to try (rpSplit)
   int e0 = stop ? 3 : (pend ? -2 : (g_inversionInTraversal ? 0 : 2)), e1 = stop ? 4 : (pend ? 0 : 3);
   for (int e = e0; leaf == 0 && !failed && e < e1; ++e) {
     bool need = true;
+    int r = 0;         // what the splitter returned
     CurvePoint p = a;  // the point to make, pending
     if (e < 0) {
       p = e == -2 ? a : b;
@@ -577,14 +582,19 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
         break;
       }
       double t = 0.0;
-      int r = OBLONG_HOOK(rpSplit)(a, b, m, t);
+      r = OBLONG_HOOK(rpSplit)(a, b, line, m, t);
       ok = r == 1;
-      need = r == 2;
-      p = pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT);
+      need = r >= 2;
+      p = r == 3 ? m : pendingPoint(t, dvec2(0.0), OBLONG_RP_PENDING_INVERT);
     }
     CurvePoint q;
     bool made = need && curvePointAt(p, q);
     if (need && !made && e < 0) failed = true;
+    if (r == 3 && !made) {  // the crossing's claim refused: the splitter's next choice
+      ++line;
+      --e;
+      continue;
+    }
     if (made) {
       if (e < 0) {
         if (p.pad.x == OBLONG_RP_PENDING_TURN) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_TURNING);

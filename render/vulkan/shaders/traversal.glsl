@@ -85,7 +85,7 @@ void rpInvert(vec3 X, out vec2 bary, out float h) {
   bary = vec2(r.u, r.v);
   h = r.h;
 }
-int rpSplit(CurvePoint a, CurvePoint b, out CurvePoint m, out double t);  // after the driver
+int rpSplit(CurvePoint a, CurvePoint b, inout int line, out CurvePoint m, out double t);  // after the driver
 bool rpHitFound() { return g_found; }
 float rpHitT() { return g_hitT; }
 dvec2 rpHitUV() {
@@ -156,13 +156,13 @@ void testMicro(McVertex v0, McVertex v1, McVertex v2) {
 
 // midpoint2d (strategies/midpoint2d.h): the crossing with the middle of the longer side,
 // else of the other side (core/kernels/midpoint2d.h), else the t-midpoint by inversion.
-int rpSplit(CurvePoint a, CurvePoint b, out CurvePoint m, out double t) {
+int rpSplit(CurvePoint a, CurvePoint b, inout int line, out CurvePoint m, out double t) {
   m = a;
   t = 0.5 * (a.t + b.t);
-  for (int k = 0; k < 2; ++k) {
+  for (; line < 2; ++line) {
     int axis;
     double c;
-    if (midpointLine(a, b, k, axis, c) && crossingAt(a, b, axis, c, m)) return 1;
+    if (midpointLine(a, b, line, axis, c) && crossingOn(a, b, axis, c, m)) return 3;
   }
   return 2;
 }
