@@ -437,7 +437,7 @@ TEST_CASE("a 4320x2161 float relief on a sphere: rmip within 1.5x a 16-bit mipma
 TEST_CASE("curve points between known ones are claimed: the inverter is the fallback", "[traversal][claims][unit]") {
   // Every point the canonical traversal needs between two known curve points (a clipped
   // end of a piece, an end of the ray inside the prism) and the marching stop's point
-  // are claimed and validated by their residual (RayPatch::pointBetween, pointFromHit).
+  // are claimed and validated by their residual (curvePointAt on a pending point).
   // Without the claims these rays invert 0.45-1.05 times per prism traversed, with them
   // 0.014-0.092 (the coarse torus's big curved triangles the most); the bound fails if
   // the claims stop validating, which exactness would not show (the inverter answers).
