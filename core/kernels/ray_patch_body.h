@@ -74,10 +74,15 @@ void rpInit(OBLONG_IN(RayMargin) m, double maxP, double maxO, double a, double b
 
 // ---- small steps -------------------------------------------------------------------------
 double slack(double t) { return OBLONG_TRAV_SLACK_REL * abs(t) + g_tAbs; }
-double bestLimit() {
-  return OBLONG_HOOK(rpHitFound)() ? double(OBLONG_HOOK(rpHitT)()) + slack(double(OBLONG_HOOK(rpHitT)()))
-                                   : double(g_tmax) + slack(double(g_tmax));
+// The far end of what is left to search: the closest hit's t, else tmax, with its slack.
+double limitNow() {
+  double t = OBLONG_HOOK(rpHitFound)() ? double(OBLONG_HOOK(rpHitT)()) : double(g_tmax);
+  return t + slack(t);
 }
+// The same, kept in g_limit where the hit can change (rpRun's start, after a cell's
+// micro-triangles), read at every other place that needs it.
+double g_limit;
+double bestLimit() { return g_limit; }
 dvec2 dirLocal() { return approxDirLocal(g_F, g_N13, g_D); }
 
 // A point to be made: its t, a uv to start from and how to make it (pad.x, negative,
@@ -740,7 +745,10 @@ void rpLoop() {
       }
       if (!clipToBox(clo, chi, OBLONG_HOOK(rpToHeight)(raw), t0, t1)) continue;
     }
-    if (kind == 1) g_microTris += OBLONG_HOOK(rpCellMicro)(clo.x + g_origin.x, clo.y + g_origin.y);
+    if (kind == 1) {
+      g_microTris += OBLONG_HOOK(rpCellMicro)(clo.x + g_origin.x, clo.y + g_origin.y);
+      g_limit = limitNow();
+    }
     else if (kind == 2) boxEnd(clo, chi, t0, t1);
     else pieceEnd(e.a, e.b, clo, chi, t0, t1, leaf);
   }
@@ -812,6 +820,7 @@ int setupCurve() {
 // One ray against one triangle after rpInit: true when a micro-triangle was hit (the hit
 // is the includer's, through rpCellMicro).
 bool rpRun() {
+  g_limit = limitNow();
   g_gen = 0;
   g_sp = 0;
   int r = setupCurve();

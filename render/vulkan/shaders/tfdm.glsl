@@ -25,7 +25,7 @@ vec2 tfdmHeights(int L, int x, int y) {
   return rpToHeight(tfdmNode(g_mesh, g_mesh.rmipBits, g_mesh.tfStored - 1, L, x, y));
 }
 void tfdmBox(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi) { rpBoxOverRect(lo, hi, h, blo, bhi); }
-double tfdmLimit() { return bestLimit(); }
+double tfdmLimit() { return limitNow(); }
 int tfdmLeaf(int x, int y) { return microCell(x, y); }
 #include "core/kernels/tfdm_body.h"
 
