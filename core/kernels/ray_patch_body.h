@@ -359,15 +359,14 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   g_mStop = dvec2(0.0);
 }
 
-// The stop's point is claimed from the hit at the best hit's limit t* (g_mStopT), in
-// pieceEnd's loop; where makePoint refuses the claim the march runs on without a stop (a
-// saving only, so no inversion is spent on it: none was needed on the shipped and paper
-// scenes once the hit's claim took its Newton step).
-// The march's stop is claimed at the closest hit instead of by an inversion: the hit's
+// The stop's point, the curve point at the best hit's limit t* (g_mStopT), is claimed
+// from the closest hit in pieceEnd's loop (OBLONG_RP_PENDING_HIT), not inverted: the hit's
 // texture position gives T's barycentrics, from which one Newton step in double claims
 // (b, s) (newtonClaim: the hit lies on a flat micro-triangle, off the displacement line
 // through its barycentrics by the micro-surface's bulge); makePoint's residual bounds
-// the error as for any claim (OBLONG_RP_PENDING_HIT, made in pieceEnd's loop).
+// the error as for any claim. Where it refuses the claim the march runs on without a stop
+// (a saving only, so no inversion is spent on it: none was needed on the shipped and
+// paper scenes once the hit's claim took its Newton step). stopAt sets the stop from it.
 double g_mStopT;
 void stopAt(OBLONG_IN(CurvePoint) m) {
   for (int k = 0; k < 2; ++k)
@@ -513,7 +512,6 @@ void wideLeaf(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
   pushBox(clo, chi, a.t, min(b.t, bestLimit()));
 }
-
 
 // A piece popped from the stack, before its box: 0 = nothing to do; 1 = box-test cells
 // [clo, chi] over [t0, t1] first (rpLoop), then pieceEnd; 2 = pieceEnd without a box.
