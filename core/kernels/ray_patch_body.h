@@ -746,9 +746,11 @@ void rpLoop() {
     if (kind == 1) {
       g_microTris += OBLONG_HOOK(rpCellMicro)(clo.x + g_origin.x, clo.y + g_origin.y);
       g_limit = limitNow();
+    } else if (kind == 2) {
+      boxEnd(clo, chi, t0, t1);
+    } else {
+      pieceEnd(e.a, e.b, clo, chi, t0, t1, leaf);
     }
-    else if (kind == 2) boxEnd(clo, chi, t0, t1);
-    else pieceEnd(e.a, e.b, clo, chi, t0, t1, leaf);
   }
 }
 
