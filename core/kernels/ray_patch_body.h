@@ -80,8 +80,9 @@ double limitNow() {
   return t + slack(t);
 }
 // The same, kept in g_limit where the hit can change (rpRun's start, after a cell's
-// micro-triangles), read at every other place that needs it.
-double g_limit;
+// micro-triangles), read at every other place that needs it; g_tLo and g_tHi: the ray's
+// [tmin, tmax] with their slack (rpRun).
+double g_limit, g_tLo, g_tHi;
 double bestLimit() { return g_limit; }
 dvec2 dirLocal() { return approxDirLocal(g_F, g_N13, g_D); }
 
@@ -709,7 +710,7 @@ void rpLoop() {
     if (kind == 1) {
       ++g_cells;
       chi = clo;
-      t0 = double(g_tmin) - slack(double(g_tmin));
+      t0 = g_tLo;
       t1 = bestLimit();
       go = 1;
     } else if (kind == 2) {
@@ -759,7 +760,7 @@ void setupBoxOnly() {
   OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PRISM);
   g_boxOnly = true;
   g_sp = 0;
-  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = bestLimit();
+  double t0 = g_tLo, t1 = bestLimit();
   clipBox(g_boxLo, g_boxHi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return;
   g_dvd = dirLocal();
@@ -775,7 +776,7 @@ int setupCurve() {
   // 1. The inflated prism (with the margin for the watertight test's rounding).
   dvec3 plo, phi;
   OBLONG_HOOK(rpInflatedBox)(plo, phi);
-  double t0 = double(g_tmin) - slack(double(g_tmin)), t1 = double(g_tmax) + slack(double(g_tmax));
+  double t0 = g_tLo, t1 = g_tHi;
   clipBox(plo, phi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return 0;
   Crossing first, last;
@@ -785,8 +786,8 @@ int setupCurve() {
     OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_GRAZE);
     return 1;
   }
-  double tIn = max(first.t, double(g_tmin) - slack(double(g_tmin)));
-  double tOut = min(last.t, double(g_tmax) + slack(double(g_tmax)));
+  double tIn = max(first.t, g_tLo);
+  double tOut = min(last.t, g_tHi);
   if (!(tIn <= tOut)) return 0;
   g_psi = psiMake(g_F, g_O, g_D);
   g_dvd = dirLocal();
@@ -820,6 +821,8 @@ int setupCurve() {
 // One ray against one triangle after rpInit: true when a micro-triangle was hit (the hit
 // is the includer's, through rpCellMicro).
 bool rpRun() {
+  g_tLo = double(g_tmin) - slack(double(g_tmin));
+  g_tHi = double(g_tmax) + slack(double(g_tmax));
   g_limit = limitNow();
   g_gen = 0;
   g_sp = 0;
