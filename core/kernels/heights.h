@@ -18,6 +18,9 @@
 OBLONG_KERNELS_BEGIN
 
 #ifndef __cplusplus
+#ifndef Maps
+#define Maps int  // the shaders' maps are globals (render/vulkan/shaders/microcells.glsl)
+#endif
 float dispTexel(Maps m, int next, int i, int j);
 float dispRaw(Maps m, int i, int j);
 #endif
@@ -65,30 +68,46 @@ OBLONG_INLINE float dispLodHeight(Maps m, int i, int j, float f) {
 
 // The micro-geometry's height at sample point s: piecewise linear on the two triangles of
 // each grid cell split by the diagonal (i,j)-(i+1,j+1), then height = scale · (raw + bias).
-OBLONG_TEMPLATE1(Maps)
-OBLONG_INLINE float dispMicroAt(Maps m, OBLONG_IN(dvec2) s, float scale, float bias) {
+// In three parts, so that a caller with other lookups fetches all from one call site (in a
+// shader each call site is a copy of the lookup): the triangle s lies in, its corner k,
+// and the height from the corners' raw texels.
+struct DispMicroTri {
+  int i, j;      // the cell
+  float fx, fy;  // s in the cell
+};
+OBLONG_INLINE DispMicroTri dispMicroTri(OBLONG_IN(dvec2) s) {
   double fi = floor(s.x), fj = floor(s.y);
-  int i = int(fi), j = int(fj);
+  DispMicroTri r;
+  r.i = int(fi), r.j = int(fj);
   OBLONG_PRECISE float fx = float(s.x - fi), fy = float(s.y - fj);
-  // The corners (i,j), (i+1,j+1) and (i+1,j) (lower triangle) or (i,j+1) (upper one),
-  // fetched from one call site (in a shader each call site is a copy of the lookup).
-  bool lower = fx >= fy;
-  float h[3];
-  for (int k = 0; k < 3; ++k) {
-    int di = k == 0 ? 0 : k == 1 ? 1 : lower ? 1 : 0, dj = k == 0 ? 0 : k == 1 ? 1 : lower ? 0 : 1;
-    h[k] = dispRaw(m, i + di, j + dj);
-  }
-  float h00 = h[0], h11 = h[1];
+  r.fx = fx, r.fy = fy;
+  return r;
+}
+// Corner k: (i,j), (i+1,j+1), then (i+1,j) (lower triangle, fx >= fy) or (i,j+1) (upper).
+OBLONG_INLINE ivec2 dispMicroCorner(OBLONG_IN(DispMicroTri) c, int k) {
+  bool lower = c.fx >= c.fy;
+  return ivec2(c.i + (k == 0 ? 0 : k == 1 ? 1 : lower ? 1 : 0), c.j + (k == 0 ? 0 : k == 1 ? 1 : lower ? 0 : 1));
+}
+OBLONG_INLINE float dispMicroHeight(OBLONG_IN(DispMicroTri) c, float h00, float h11, float h2, float scale, float bias) {
+  float fx = c.fx, fy = c.fy;
   OBLONG_PRECISE float H;
-  if (lower) {  // lower triangle (i,j), (i+1,j), (i+1,j+1)
-    float h10 = h[2];
-    H = h00 + fx * (h10 - h00) + fy * (h11 - h10);
-  } else {  // upper triangle (i,j), (i+1,j+1), (i,j+1)
-    float h01 = h[2];
-    H = h00 + fy * (h01 - h00) + fx * (h11 - h01);
+  if (fx >= fy) {  // lower triangle (i,j), (i+1,j), (i+1,j+1): h2 = h10
+    H = h00 + fx * (h2 - h00) + fy * (h11 - h2);
+  } else {  // upper triangle (i,j), (i+1,j+1), (i,j+1): h2 = h01
+    H = h00 + fy * (h2 - h00) + fx * (h11 - h2);
   }
   OBLONG_PRECISE float r = scale * (H + bias);
   return r;
+}
+OBLONG_TEMPLATE1(Maps)
+OBLONG_INLINE float dispMicroAt(Maps m, OBLONG_IN(dvec2) s, float scale, float bias) {
+  DispMicroTri c = dispMicroTri(s);
+  float h[3];
+  for (int k = 0; k < 3; ++k) {  // one call site
+    ivec2 q = dispMicroCorner(c, k);
+    h[k] = dispRaw(m, q.x, q.y);
+  }
+  return dispMicroHeight(c, h[0], h[1], h[2], scale, bias);
 }
 
 OBLONG_KERNELS_END

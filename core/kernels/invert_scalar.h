@@ -174,8 +174,9 @@ OBLONG_INLINE int polyRoots(KS a0, KS a1, KS a2, KS a3, OBLONG_OUT_ARRAY KS x[3]
   bool cubic = abs(a2) < big * abs(a3) || abs(a1) < big2 * abs(a3) || abs(a0) < big3 * abs(a3);
   bool quadratic = abs(a1) < big * abs(a2) || abs(a0) < big2 * abs(a2);
   int n = 0;
-  KS y0 = KS(0), y1 = KS(0);
+  KS y0 = KS(0), y1 = KS(0), first = KS(0);
   int m = 0;
+  bool solveQ = false;
   if (cubic) {
     degree = 3;
     OBLONG_PRECISE KS A = KDIV(a2, a3);
@@ -204,26 +205,43 @@ OBLONG_INLINE int polyRoots(KS a0, KS a1, KS a2, KS a3, OBLONG_OUT_ARRAY KS x[3]
       }
     }
     if (!KFINITE(r)) return 0;
-    r = polishPolyRoot(a0, a1, a2, a3, r);
-    x[n++] = r;
-    OBLONG_PRECISE KS b2 = a2 + a3 * r;  // synthetic division from the top: a3 x² + b2 x + b1
-    if (r != KS(0) && abs(r) * r * r * abs(a3) >= abs(a0)) {
-      // r is the largest root: deflate from the bottom (keeps small roots accurate).
-      OBLONG_PRECISE KS c1 = -(a1 + KDIV(a0, r));
-      m = quadRoots(-a0, c1, a3 * r, y0, y1);
-    } else {
-      OBLONG_PRECISE KS c0 = a1 + r * b2;
-      m = quadRoots(c0, b2, a3, y0, y1);
-    }
+    first = r;
   } else if (quadratic) {
     degree = 2;
-    m = quadRoots(a0, a1, a2, y0, y1);
+    solveQ = true;
   } else if (abs(a1) > KS(K_DROP_EPS) * M) {
     degree = 1;
-    x[n++] = polishPolyRoot(a0, a1, a2, a3, KDIV(-a0, a1));
+    first = KDIV(-a0, a1);
   }
-  if (m > 0) x[n++] = polishPolyRoot(a0, a1, a2, a3, y0);
-  if (m > 1) x[n++] = polishPolyRoot(a0, a1, a2, a3, y1);
+  // The roots polished, and the quadratic solved, from one call site each (a shader
+  // inlines every call): root 0 is the one found directly (the cubic's largest, or the
+  // linear root), roots 1 and 2 the quadratic's (degree 2, or the cubic deflated by its
+  // polished largest root).
+  KS qc0 = a0, qc1 = a1, qc2 = a2;
+  for (int i = 0; i < 3; ++i) {
+    if (i == 1 && solveQ) m = quadRoots(qc0, qc1, qc2, y0, y1);
+    if (i == 0 ? degree != 3 && degree != 1 : i > m) continue;
+    x[n] = polishPolyRoot(a0, a1, a2, a3, i == 0 ? first : i == 1 ? y0 : y1);
+    if (i == 0 && degree == 3) {
+      KS r = x[n];
+      OBLONG_PRECISE KS b2 = a2 + a3 * r;  // synthetic division from the top: a3 x² + b2 x + b1
+      if (r != KS(0) && abs(r) * r * r * abs(a3) >= abs(a0)) {
+        // r is the largest root: deflate from the bottom (keeps small roots accurate).
+        OBLONG_PRECISE KS c1 = -(a1 + KDIV(a0, r));
+        OBLONG_PRECISE KS c2 = a3 * r;
+        qc0 = -a0;
+        qc1 = c1;
+        qc2 = c2;
+      } else {
+        OBLONG_PRECISE KS c0 = a1 + r * b2;
+        qc0 = c0;
+        qc1 = b2;
+        qc2 = a3;
+      }
+      solveQ = true;
+    }
+    ++n;
+  }
   // Keep finite candidates that are roots: |f| <= tol · Σ|a_k||x|^k rejects the real parts
   // of complex pairs that the near-double rule let through.
   int kept = 0;

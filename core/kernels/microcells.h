@@ -17,7 +17,6 @@
 //     template parameter; GLSL: a macro naming a type, functions defined after this
 //     header, which declares them):
 //       float mcRaw(McHeights h, int i, int j)          raw texel of sample (i, j)
-//       float mcMicroAt(McHeights h, dvec2 s)           Displacement::microAtSample
 //       bool mcGridCached(McHeights h, int i, int j, out McVertex v)  a grid point inside T
 //                                     when the includer keeps it (the CPU's cache; GLSL: none)
 //       vec2 mcGridUV(McHeights h, int i, int j)        Displacement::sampleToUV
@@ -26,6 +25,7 @@
 #ifndef OBLONG_KERNELS_MICROCELLS_H
 #define OBLONG_KERNELS_MICROCELLS_H
 
+#include "core/kernels/heights.h"  // the micro-triangle at a sample point
 #include "core/kernels/lang.h"
 
 // Where a polygon vertex comes from (decides how its world position is computed).
@@ -89,7 +89,6 @@ McPV g_mcBuf[2 * OBLONG_MC_POLY];
 #define McBuf int
 #define OBLONG_MC_AT(buf, k) g_mcBuf[k]
 float mcRaw(McHeights h, int i, int j);
-float mcMicroAt(McHeights h, dvec2 s);
 bool mcGridCached(McHeights h, int i, int j, out McVertex v);
 vec2 mcGridUV(McHeights h, int i, int j);
 #endif
@@ -317,8 +316,9 @@ OBLONG_FORCE_INLINE McVertex mcGridInterior(OBLONG_IN(McTri) T, OBLONG_IN(vec2) 
 }
 
 // Raw height on grid line (type, c) at sample point s: linear between the line's samples.
-OBLONG_TEMPLATE1(McHeights)
-OBLONG_INLINE float mcLineHeight(McHeights hs, int type, int c, OBLONG_IN(dvec2) s) {
+// The height along grid line (type, c) at s: linear between the line's two samples
+// around s, ends (i0, j0), (i1, j1) and fraction f from the first.
+OBLONG_INLINE void mcLineEnds(int type, int c, OBLONG_IN(dvec2) s, OBLONG_OUT(ivec2) e0, OBLONG_OUT(ivec2) e1, OBLONG_OUT(float) f) {
   int i0, j0, i1, j1;
   double at;
   if (type == OBLONG_MC_LINE_V) {
@@ -331,22 +331,9 @@ OBLONG_INLINE float mcLineHeight(McHeights hs, int type, int c, OBLONG_IN(dvec2)
     j0 = int(floor(s.y));
     i0 = j0 + c, i1 = i0 + 1, j1 = j0 + 1, at = s.y - double(j0);
   }
-  float f = float(at);
-  float e[2];
-  for (int k = 0; k < 2; ++k) e[k] = mcRaw(hs, k == 0 ? i0 : i1, k == 0 ? j0 : j1);  // one call site
-  OBLONG_PRECISE float r = e[0] + f * (e[1] - e[0]);
-  return r;
-}
-
-// Vertex k of T: its own position and unit normal, the height at its uv.
-OBLONG_TEMPLATE1(McHeights)
-OBLONG_INLINE McVertex mcTVertex(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeights hs, int k) {
-  float h = mcMicroAt(hs, E.S[k]);
-  McVertex r;
-  OBLONG_PRECISE vec3 p = T.p[k] + h * T.n[k];  // n[k] is unit
-  r.p = p;
-  r.uv = T.t[k];
-  return r;
+  e0 = ivec2(i0, j0);
+  e1 = ivec2(i1, j1);
+  f = float(at);
 }
 
 // The world point of polygon vertex v. Grid points exactly on an edge of T are computed
@@ -360,14 +347,14 @@ OBLONG_TEMPLATE1(McHeights)
 OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeights hs, OBLONG_IN(McPV) v, int mask) {
   int edge = -1;
   double t = 0.0;
-  float raw = 0.0f;
+  dvec2 s = v.s;
   bool grid = false;  // a grid point inside T
   if (v.kind == OBLONG_MC_CROSS) {
     edge = v.a;
     t = clamp(mcCrossParamRaw(E, v.a, v.lineType, v.lineC), 0.0, 1.0);  // a final vertex: on the segment
     dvec2 SA = E.SA[edge];
-    OBLONG_PRECISE dvec2 s = SA + t * (E.SB[edge] - SA);
-    raw = mcLineHeight(hs, v.lineType, v.lineC, s);
+    OBLONG_PRECISE dvec2 p = SA + t * (E.SB[edge] - SA);
+    s = p;
   } else if (v.kind != OBLONG_MC_TVERTEX) {  // a grid point, maybe on an edge of T
     for (int e = 0; e < 3 && edge < 0; ++e)
       if ((mask >> e & 1) != 0 && mcOrient(E.SA[e], E.SB[e], v.s) == 0.0) {
@@ -383,14 +370,40 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
       if (mcGridCached(hs, v.a, v.b, c)) return c;
       grid = true;
     }
-    raw = mcRaw(hs, v.a, v.b);
   }
-  // T's vertices from one call site (in a shader each call site is a copy of the
-  // height lookups it makes).
-  if (!grid && (v.kind == OBLONG_MC_TVERTEX || t == 0.0 || t == 1.0)) {
-    int k = v.a;
-    if (v.kind != OBLONG_MC_TVERTEX) k = t == 0.0 ? E.A[edge] : E.B[edge];
-    return mcTVertex(T, E, hs, k);
+  int k = -1;  // T's vertex, when v is one
+  if (!grid && (v.kind == OBLONG_MC_TVERTEX || t == 0.0 || t == 1.0))
+    k = v.kind == OBLONG_MC_TVERTEX ? v.a : t == 0.0 ? E.A[edge] : E.B[edge];
+  // The texels of its height, fetched from one call site (in a shader each call site is
+  // a copy of the lookup with its level-of-detail blend): T's vertex k from the micro-
+  // triangle at its sample point (Displacement::microAtSample), a crossing from its grid
+  // line's two samples, a grid point from its own.
+  DispMicroTri mt = dispMicroTri(k >= 0 ? E.S[k] : s);
+  ivec2 at[3];
+  float f = 0.0f;
+  int n = 1;
+  at[0] = ivec2(v.a, v.b);
+  if (k >= 0) {
+    n = 3;
+    for (int q = 0; q < 3; ++q) at[q] = dispMicroCorner(mt, q);
+  } else if (v.kind == OBLONG_MC_CROSS) {
+    n = 2;
+    mcLineEnds(v.lineType, v.lineC, s, at[0], at[1], f);
+  }
+  float h[3];
+  for (int q = 0; q < n; ++q) h[q] = mcRaw(hs, at[q].x, at[q].y);
+  if (k >= 0) {
+    McVertex r;
+    float hk = dispMicroHeight(mt, h[0], h[1], h[2], T.scale, T.bias);
+    OBLONG_PRECISE vec3 p = T.p[k] + hk * T.n[k];  // n[k] is unit
+    r.p = p;
+    r.uv = T.t[k];
+    return r;
+  }
+  float raw = h[0];
+  if (n == 2) {
+    OBLONG_PRECISE float r = h[0] + f * (h[1] - h[0]);
+    raw = r;
   }
   McPre q = grid ? mcGridPre(T, mcGridUV(hs, v.a, v.b), raw) : mcOnEdgePre(T, E, edge, t, raw);
   return mcVertexAt(T, q);

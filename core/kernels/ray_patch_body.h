@@ -621,20 +621,23 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
     else startMarch(a, b);
     return;
   }
-  if (pend) {
-    if (failed) {  // no point: this piece's interval by boxes over all of T's cells
-      OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PIECE);
-      pushBox(g_cellLo, g_cellHi, a.t, min(b.t, bestLimit()));
-      return;
-    }
+  if (pend && !failed) {
     // The piece below starts where this one ends (setupCurve pushed them in order).
     if (pendB && g_sp > 0 && !isBox(g_st[g_sp - 1]) && pending(g_st[g_sp - 1].a) && g_st[g_sp - 1].a.t == b.t)
       g_st[g_sp - 1].a = b;
     pushPiece(a, b);
     return;
   }
-  if (!ok) {
+  if (pend || !ok) {
+    // No point: this piece's interval by boxes over all of T's cells (a pending end not
+    // made), or over its cells (no split point).
     OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BOX_ONLY_PIECE);
+    if (pend) {
+      clo = g_cellLo;
+      chi = g_cellHi;
+      t0 = a.t;
+      t1 = min(b.t, bestLimit());
+    }
     pushBox(clo, chi, t0, t1);
     return;
   }
@@ -673,13 +676,12 @@ void boxEnd(ivec2 clo, ivec2 chi, double t0, double t1) {
   ivec2 aHi = chi, bLo = clo;
   aHi[ax] = mid;
   bLo[ax] = mid + 1;
-  // Lower half first when the ray runs towards +axis (order matters for speed only).
-  if (g_dvd[ax] >= 0.0) {
-    pushBox(bLo, chi, t0, t1);
-    pushBox(clo, aHi, t0, t1);
-  } else {
-    pushBox(clo, aHi, t0, t1);
-    pushBox(bLo, chi, t0, t1);
+  // Lower half first when the ray runs towards +axis (order matters for speed only): the
+  // upper pushed first. One call site (a shader inlines each call).
+  bool upperFirst = g_dvd[ax] >= 0.0;
+  for (int q = 0; q < 2; ++q) {
+    bool upper = (q == 0) == upperFirst;
+    pushBox(upper ? bLo : clo, upper ? chi : aHi, t0, t1);
   }
 }
 
@@ -763,7 +765,6 @@ void setupBoxOnly() {
   double t0 = g_tLo, t1 = bestLimit();
   clipBox(g_boxLo, g_boxHi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return;
-  g_dvd = dirLocal();
   pushBox(g_cellLo, g_cellHi, t0, t1);
 }
 
@@ -790,7 +791,6 @@ int setupCurve() {
   double tOut = min(last.t, g_tHi);
   if (!(tIn <= tOut)) return 0;
   g_psi = psiMake(g_F, g_O, g_D);
-  g_dvd = dirLocal();
   // 2. Monotone pieces, between ψ's turning points, all their ends left pending, made
   // by pieceEnd when their piece is popped: the crossings' claims at their prism
   // coordinates; an end inside the prism (where the ray starts or ends) claimed near the
@@ -828,6 +828,8 @@ bool rpRun() {
   g_sp = 0;
   int r = setupCurve();
   if (r == 1) setupBoxOnly();
-  if (r != 0) rpLoop();
+  if (r == 0) return false;
+  g_dvd = dirLocal();  // the order of the stack's children and of a cell range's cells
+  rpLoop();
   return OBLONG_HOOK(rpHitFound)();
 }

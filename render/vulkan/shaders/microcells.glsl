@@ -28,11 +28,15 @@ float dispTexel(Maps m, int next, int i, int j) { return levelAt(next, i, j); }
 float mapAt(int i, int j) { return dispLodHeight(0, i, j, g_blend); }
 float dispRaw(Maps m, int i, int j) { return mapAt(i, j); }
 // A λ per ray (PerRayLod::intersect, Displacement::blendOf): the record of level ⌊λ⌋
-// (λ clamped to [0, last level]; NaN: 0) and the fraction toward the next level.
-void selectLevel(float rayLod) {
+// (λ clamped to [0, last level]; NaN: 0) of scene mesh record `scene`, then, with that
+// level in g_mesh, the next level and the fraction toward it. The caller loads g_mesh once
+// (each load of a record is a copy of its every field in a shader).
+uint levelRecord(uint scene, float rayLod) {
   float l = rayLod > 0.0 ? rayLod : 0.0;
-  int k = int(min(floor(l), float(g_mesh.lodLevels - 1)));
-  g_mesh = meshes[g_mesh.lodFirst + uint(k)];
+  int k = int(min(floor(l), float(meshes[scene].lodLevels - 1)));
+  return meshes[scene].lodFirst + uint(k);
+}
+void selectNext(float rayLod) {
   if (g_mesh.lodNext < 0) return;
   g_next = meshes[g_mesh.lodNext];
   if (rayLod > g_mesh.lod) g_blend = min(float(double(rayLod) - double(g_mesh.lod)), 1.0);

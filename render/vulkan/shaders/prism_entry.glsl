@@ -7,9 +7,13 @@
 // beginPrism: false for a triangle that cannot be displaced (no hit, no counters).
 bool beginPrism() {
   uint ray = pc.rayOffset + gl_LaunchIDEXT.x;
-  g_mesh = meshes[gl_InstanceCustomIndexEXT];
+  uint record = gl_InstanceCustomIndexEXT;
+  bool perRay = meshes[record].lodLevels > 0;
+  float rayLod = perRay ? rays[ray].lod : 0.0;
+  if (perRay) record = levelRecord(record, rayLod);
+  g_mesh = meshes[record];
   g_blend = 0.0;
-  if (g_mesh.lodLevels > 0) selectLevel(rays[ray].lod);
+  if (perRay) selectNext(rayLod);
   g_tri = int(g_mesh.triOffset) + gl_PrimitiveID;
   if (TRI.valid == 0) return false;
   // The mesh's frame: the world origin minus the frame's in double, rounded once (the
