@@ -100,6 +100,8 @@ class Prism {
   dvec3 vertex(int k, bool top) const { return p_.q[k] + (top ? p_.b : p_.a) * p_.n[k]; }
   BoxD bounds() const;
 
+  // How far the base triangle is grown beyond T, in barycentrics (Prism::inflated's delta).
+  double growth() const { return -p_.bv[0].x; }
   // Every crossing of the line O + tD with the prism's boundary (core/kernels/prism.h).
   int crossings(const dvec3& O, const dvec3& D, Crossing& first, Crossing& last) const {
     return shared::prismCrossings(p_, O, D, first, last);

@@ -236,6 +236,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
   int rpPrismCrossings(shared::Crossing& first, shared::Crossing& last) const {
     return prism_->crossings(this->g_O, this->g_D, first, last);
   }
+  double rpPrismGrowth() const { return prism_->growth(); }
   static void rpStat(int what) {
     switch (what) {
       case OBLONG_RP_STAT_ILL_POSED: OBLONG_STAT_INC(travIllPosed); break;

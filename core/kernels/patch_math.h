@@ -163,10 +163,21 @@ OBLONG_INLINE bool rayParamAt(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLON
 // may turn, sorted and distinct. Candidates are the points of the conic ψ = 0 on the
 // lines ψ_X = 0 and ψ_Y = 0 (other branches of the conic show up too), each taken to the
 // ray by rayParamAt. The caller finds the curve's point at each (by inversion) and splits
-// [tIn, tOut] there into pieces that are monotone in X and Y. Returns the count (≤ 4).
+// [tIn, tOut] there into pieces that are monotone in X and Y. Returns the count (≤ 4);
+// bs and ss: each split's candidate as prism coordinates (its barycentrics and
+// rayParamAt's s), from which the curve point is claimed without an inversion (its
+// residual bounds its error, as for any claim). With farB >= 0 the caller knows that the
+// curve's points in (tIn, tOut) have barycentrics within T grown by less than farB: a
+// candidate beyond that by its root's whole error bound is not one of them (another
+// branch of ψ = 0) and is dropped (a NaN one too).
 OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
-                                 double tIn, double tOut, OBLONG_OUT_ARRAY double ts[4]) {
-  for (int k = 0; k < 4; ++k) ts[k] = 0.0;
+                                 double tIn, double tOut, double farB, OBLONG_OUT_ARRAY double ts[4],
+                                 OBLONG_OUT_ARRAY dvec2 bs[4], OBLONG_OUT_ARRAY double ss[4]) {
+  for (int k = 0; k < 4; ++k) {
+    ts[k] = 0.0;
+    bs[k] = dvec2(0.0);
+    ss[k] = 0.0;
+  }
   int m = 0;
   for (int L = 0; L < 2; ++L) {
     // Line a X + b Y + c = 0: ψ_X = 0 is (2cXX, cXY, cX); ψ_Y = 0 is (cXY, 2cYY, cY).
@@ -185,9 +196,18 @@ OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OB
     int nr = quadraticRoots(q2, q1, q0, tau, pad);
     for (int k = 0; k < nr; ++k) {
       OBLONG_PRECISE dvec2 cand = Q + tau[k] * R;
+      // Its barycentrics, each at its largest over the root's error pad[k] along R.
+      dvec2 bc = frameBary(F, cand);
+      OBLONG_PRECISE dvec2 db = F.bX * R.x + F.bY * R.y;
+      OBLONG_PRECISE dvec3 lam = dvec3(bc.x, bc.y, 1.0 - bc.x - bc.y) + abs(dvec3(db.x, db.y, db.x + db.y)) * pad[k];
+      if (farB >= 0.0 && !(lam.x >= -farB && lam.y >= -farB && lam.z >= -farB)) continue;
       double t, s;
       if (!rayParamAt(F, O, D, cand, t, s)) continue;
-      if (t > tIn && t < tOut) ts[m++] = t;
+      if (!(t > tIn && t < tOut)) continue;
+      ts[m] = t;
+      bs[m] = bc;
+      ss[m] = s;
+      ++m;
     }
   }
   for (int i = 1; i < m; ++i)  // insertion sort (m <= 4)
@@ -195,10 +215,21 @@ OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OB
       double x = ts[j];
       ts[j] = ts[j - 1];
       ts[j - 1] = x;
+      dvec2 xb = bs[j];
+      bs[j] = bs[j - 1];
+      bs[j - 1] = xb;
+      double xs = ss[j];
+      ss[j] = ss[j - 1];
+      ss[j - 1] = xs;
     }
   int u = 0;
   for (int i = 0; i < m; ++i)
-    if (u == 0 || ts[i] != ts[u - 1]) ts[u++] = ts[i];
+    if (u == 0 || ts[i] != ts[u - 1]) {
+      ts[u] = ts[i];
+      bs[u] = bs[i];
+      ss[u] = ss[i];
+      ++u;
+    }
   return u;
 }
 

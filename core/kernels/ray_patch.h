@@ -45,6 +45,7 @@
 //         g_texPadF (rect_bounds.h's boxOverRectF)
 //   void  rpInflatedBox(out dvec3 lo, out dvec3 hi)   the inflated prism's box, padded
 //   int   rpPrismCrossings(out Crossing first, out Crossing last)  prism.h's crossings
+//   double rpPrismGrowth()                     the inflated prism's base: T grown by this (barycentric)
 //   void  rpStat(int what)                     a statistics event (OBLONG_RP_STAT_*)
 #ifndef OBLONG_KERNELS_RAY_PATCH_H
 #define OBLONG_KERNELS_RAY_PATCH_H
@@ -73,7 +74,7 @@
 // is known, and pad.x (negative, which a made point's pad never is) says how to make it.
 #define OBLONG_RP_PENDING_CLAIM (-1.0)   // claimed from uv (on the chord between two points), else inverted
 #define OBLONG_RP_PENDING_INVERT (-2.0)  // inverted
-#define OBLONG_RP_PENDING_TURN (-3.0)    // a turning point: inverted
+#define OBLONG_RP_PENDING_TURN (-3.0)    // a turning point: claimed at its prism coordinates (as a crossing), else inverted
 #define OBLONG_RP_PENDING_CROSSING (-5.0)  // claimed at known prism coordinates (uv: b, pad.y: s)
 #define OBLONG_RP_PENDING_HIT (-6.0)     // claimed from uv at the closest hit, whatever its pad
 // A stack entry that is a box: a.pad.x holds this, a.uv and b.uv its local cells' corners

@@ -99,14 +99,14 @@ CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
 
 // Prism coordinates (b, s) for the curve point p.t, made as its pad.x says (a pending
 // point): by the inverter (invert); at prism coordinates already known (a crossing of the
-// prism: b = p.uv, s = p.pad.y); or claimed without inversion from uv p.uv near the point
+// prism, or a turning point's candidate on ψ = 0: b = p.uv, s = p.pad.y); or claimed without inversion from uv p.uv near the point
 // (on the chord between two curve points, chordUv; at the closest hit): s by least
 // squares and one Newton step in double (newtonClaim). Either way makePoint's residual
 // bounds the point's error.
 bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(dvec2) b, OBLONG_OUT(double) s) {
   b = p.uv;
   s = p.pad.y;
-  if (!invert && p.pad.x == OBLONG_RP_PENDING_CROSSING) return true;
+  if (!invert && (p.pad.x == OBLONG_RP_PENDING_CROSSING || p.pad.x == OBLONG_RP_PENDING_TURN)) return true;
   if (!invert) return newtonClaim(g_F, g_O, g_D, p.t, frameBary(g_F, p.uv), b, s);
   ++g_inversions;
   OBLONG_PRECISE dvec3 X = g_O + p.t * g_D;
@@ -121,13 +121,15 @@ bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(dvec2) b, OBLONG_
 }
 
 // The curve point for pending point p (OBLONG_RP_PENDING_*): a claim first where p says
-// so (near uv when PENDING_CLAIM, kept only when its pad is at most OBLONG_TRAV_CLAIM_PAD;
-// at the closest hit whatever its pad; at a crossing's prism coordinates), else or then
-// by inversion (never for the hit's and the crossings' claims). The one call site of the
+// so (near uv when PENDING_CLAIM and at a turning point's prism coordinates, each kept
+// only when its pad is at most OBLONG_TRAV_CLAIM_PAD; at the closest hit whatever its pad;
+// at a crossing's prism coordinates), else or then by inversion (never for the hit's and
+// the crossings' claims). The one call site of the
 // claim's residual (makePoint) and of the inverter: pieceEnd's loop.
 bool curvePointAt(OBLONG_IN(CurvePoint) p, OBLONG_OUT(CurvePoint) outp) {
   double how = p.pad.x;
-  bool claim = how == OBLONG_RP_PENDING_CLAIM || how == OBLONG_RP_PENDING_HIT || how == OBLONG_RP_PENDING_CROSSING;
+  bool claim = how == OBLONG_RP_PENDING_CLAIM || how == OBLONG_RP_PENDING_HIT || how == OBLONG_RP_PENDING_CROSSING ||
+               how == OBLONG_RP_PENDING_TURN;
   bool invert = how != OBLONG_RP_PENDING_HIT && how != OBLONG_RP_PENDING_CROSSING;
   outp.t = p.t;
   outp.uv = dvec2(0.0);
@@ -136,7 +138,8 @@ bool curvePointAt(OBLONG_IN(CurvePoint) p, OBLONG_OUT(CurvePoint) outp) {
     dvec2 b;
     double s;
     if (coordsAt(p, at == 1, b, s) && makePoint(g_F, g_claim, g_O, g_D, p.t, b, s, outp) &&
-        (at == 1 || how != OBLONG_RP_PENDING_CLAIM || outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD))
+        (at == 1 || (how != OBLONG_RP_PENDING_CLAIM && how != OBLONG_RP_PENDING_TURN) ||
+         outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD))
       return true;
   }
   if (invert) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BAD_INVERSION);
@@ -795,8 +798,14 @@ int setupCurve() {
   // by pieceEnd when their piece is popped: the crossings' claims at their prism
   // coordinates; an end inside the prism (where the ray starts or ends) claimed near the
   // chord between the crossings, else inverted; the turning points inverted.
-  double ts[4];
-  int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, ts);
+  double ts[4], ss[4];
+  dvec2 bs[4];
+  // With two crossings the ray runs inside the inflated prism from the first to the last,
+  // so its curve's points there lie on the prism's base triangle, T grown by its growth:
+  // a candidate more than a whole triangle beyond that lies on another branch of ψ = 0 (a
+  // focal point's: on a sphere every displacement line meets the centre) and is dropped.
+  double farB = nc == 2 ? 1.0 + OBLONG_HOOK(rpPrismGrowth)() : -1.0;
+  int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, farB, ts, bs, ss);
   CurvePoint pts[6];
   for (int k = 0; k < 2; ++k) {
     Crossing c = k == 0 ? first : last;
@@ -812,7 +821,10 @@ int setupCurve() {
     }
     pts[k == 0 ? 0 : ns + 1] = p;
   }
-  for (int k = 0; k < ns; ++k) pts[k + 1] = pendingPoint(ts[k], dvec2(0.0), OBLONG_RP_PENDING_TURN);
+  for (int k = 0; k < ns; ++k) {
+    pts[k + 1] = pendingPoint(ts[k], bs[k], OBLONG_RP_PENDING_TURN);
+    pts[k + 1].pad.y = ss[k];
+  }
   g_sp = 0;
   for (int k = ns; k >= 0; --k) pushPiece(pts[k], pts[k + 1]);
   return 2;
