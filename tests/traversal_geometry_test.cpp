@@ -136,7 +136,8 @@ TEST_CASE("the ray's curve is monotone between the turning points", "[traversal]
     const vec3 c = glm::normalize(vec3(W(rng), W(rng), W(rng)) + vec3(0.01f));
     const vec3 e = glm::normalize(glm::cross(c, vec3(0.3f, 0.5f, 0.8f))), f = glm::cross(c, e);
     DisplacedTriangle T;
-    T.p[0] = glm::normalize(c - 0.05f * e), T.p[1] = glm::normalize(c + 0.05f * e), T.p[2] = glm::normalize(c + 0.05f * f);
+    T.p[0] = glm::normalize(c - 0.05f * e), T.p[1] = glm::normalize(c + 0.05f * e);
+    T.p[2] = glm::normalize(c + 0.05f * f);
     for (int i = 0; i < 3; ++i) T.n[i] = glm::normalize(T.p[i]);
     T.t[0] = vec2(0.1f, 0.1f), T.t[1] = vec2(0.9f, 0.15f), T.t[2] = vec2(0.3f, 0.9f);
     if (T.prepare()) sphere.tris.push_back(T);

@@ -88,7 +88,8 @@ OBLONG_INLINE ivec2 dispMicroCorner(OBLONG_IN(DispMicroTri) c, int k) {
   bool lower = c.fx >= c.fy;
   return ivec2(c.i + (k == 0 ? 0 : k == 1 ? 1 : lower ? 1 : 0), c.j + (k == 0 ? 0 : k == 1 ? 1 : lower ? 0 : 1));
 }
-OBLONG_INLINE float dispMicroHeight(OBLONG_IN(DispMicroTri) c, float h00, float h11, float h2, float scale, float bias) {
+OBLONG_INLINE float dispMicroHeight(OBLONG_IN(DispMicroTri) c, float h00, float h11, float h2, float scale,
+                                    float bias) {
   float fx = c.fx, fy = c.fy;
   OBLONG_PRECISE float H;
   if (fx >= fy) {  // lower triangle (i,j), (i+1,j), (i+1,j+1): h2 = h10

@@ -318,7 +318,8 @@ OBLONG_FORCE_INLINE McVertex mcGridInterior(OBLONG_IN(McTri) T, OBLONG_IN(vec2) 
 // Raw height on grid line (type, c) at sample point s: linear between the line's samples.
 // The height along grid line (type, c) at s: linear between the line's two samples
 // around s, ends (i0, j0), (i1, j1) and fraction f from the first.
-OBLONG_INLINE void mcLineEnds(int type, int c, OBLONG_IN(dvec2) s, OBLONG_OUT(ivec2) e0, OBLONG_OUT(ivec2) e1, OBLONG_OUT(float) f) {
+OBLONG_INLINE void mcLineEnds(int type, int c, OBLONG_IN(dvec2) s, OBLONG_OUT(ivec2) e0, OBLONG_OUT(ivec2) e1,
+                              OBLONG_OUT(float) f) {
   int i0, j0, i1, j1;
   double at;
   if (type == OBLONG_MC_LINE_V) {

@@ -74,7 +74,7 @@
 // is known, and pad.x (negative, which a made point's pad never is) says how to make it.
 #define OBLONG_RP_PENDING_CLAIM (-1.0)   // claimed from uv (on the chord between two points), else inverted
 #define OBLONG_RP_PENDING_INVERT (-2.0)  // inverted
-#define OBLONG_RP_PENDING_TURN (-3.0)    // a turning point: claimed at its prism coordinates (as a crossing), else inverted
+#define OBLONG_RP_PENDING_TURN (-3.0)    // a turning point: claimed at its prism coordinates, else inverted
 #define OBLONG_RP_PENDING_CROSSING (-5.0)  // claimed at known prism coordinates (uv: b, pad.y: s)
 #define OBLONG_RP_PENDING_HIT (-6.0)     // claimed from uv at the closest hit, whatever its pad
 // A stack entry that is a box: a.pad.x holds this, a.uv and b.uv its local cells' corners

@@ -99,10 +99,10 @@ CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
 
 // Prism coordinates (b, s) for the curve point p.t, made as its pad.x says (a pending
 // point): by the inverter (invert); at prism coordinates already known (a crossing of the
-// prism, or a turning point's candidate on ψ = 0: b = p.uv, s = p.pad.y); or claimed without inversion from uv p.uv near the point
-// (on the chord between two curve points, chordUv; at the closest hit): s by least
-// squares and one Newton step in double (newtonClaim). Either way makePoint's residual
-// bounds the point's error.
+// prism, or a turning point's candidate on ψ = 0: b = p.uv, s = p.pad.y); or claimed
+// without inversion from uv p.uv near the point (on the chord between two curve points,
+// chordUv; at the closest hit): s by least squares and one Newton step in double
+// (newtonClaim). Either way makePoint's residual bounds the point's error.
 bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(dvec2) b, OBLONG_OUT(double) s) {
   b = p.uv;
   s = p.pad.y;
@@ -124,8 +124,8 @@ bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(dvec2) b, OBLONG_
 // so (near uv when PENDING_CLAIM and at a turning point's prism coordinates, each kept
 // only when its pad is at most OBLONG_TRAV_CLAIM_PAD; at the closest hit whatever its pad;
 // at a crossing's prism coordinates), else or then by inversion (never for the hit's and
-// the crossings' claims). The one call site of the
-// claim's residual (makePoint) and of the inverter: pieceEnd's loop.
+// the crossings' claims). The one call site of the claim's residual (makePoint) and of
+// the inverter: pieceEnd's loop.
 bool curvePointAt(OBLONG_IN(CurvePoint) p, OBLONG_OUT(CurvePoint) outp) {
   double how = p.pad.x;
   bool claim = how == OBLONG_RP_PENDING_CLAIM || how == OBLONG_RP_PENDING_HIT || how == OBLONG_RP_PENDING_CROSSING ||
@@ -797,7 +797,8 @@ int setupCurve() {
   // 2. Monotone pieces, between ψ's turning points, all their ends left pending, made
   // by pieceEnd when their piece is popped: the crossings' claims at their prism
   // coordinates; an end inside the prism (where the ray starts or ends) claimed near the
-  // chord between the crossings, else inverted; the turning points inverted.
+  // chord between the crossings, else inverted; the turning points claimed at their
+  // candidates' prism coordinates, else inverted.
   double ts[4], ss[4];
   dvec2 bs[4];
   // With two crossings the ray runs inside the inflated prism from the first to the last,
