@@ -76,9 +76,16 @@ def images_differ(oblong, fresh, kept, work):
     p = subprocess.run([str(oblong), "compare", str(fresh), str(kept), "--json"], capture_output=True, text=True)
     if p.returncode != 0:
         return p.stderr.strip()
-    err = json.loads(p.stdout)["max_pixel_error"]
+    r = json.loads(p.stdout)
+    err, mse = r["max_pixel_error"], r["mse"]
     # 8-bit sRGB images: one code of rounding is up to about 2.5/255 in linear values.
-    return None if err <= 3 / 255 else f"largest pixel difference {err:.4f}"
+    # Beyond that, a few pixels may differ between machines (a silhouette's grazing camera
+    # rays on the step heat map: 230 of 640x559 pixels, mean squared error 9e-7, between
+    # two of this project's machines with the same code); a change in what the code does
+    # moves far more of the image than a mean squared error of 1e-5 (PSNR 50 dB) allows.
+    if err <= 3 / 255 or mse <= 1e-5:
+        return None
+    return f"largest pixel difference {err:.4f}, mean squared error {mse:.2e}"
 
 
 def main():
