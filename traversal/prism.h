@@ -101,7 +101,9 @@ class Prism {
   BoxD bounds() const;
 
   // How far the base triangle is grown beyond T, in barycentrics (Prism::inflated's delta).
-  double growth() const { return -p_.bv[0].x; }
+  double growth() const { return shared::prismGrowth(p_); }
+  // The shape the kernels take (core/kernels/prism.h).
+  const shared::PrismShape& shape() const { return p_; }
   // Every crossing of the line O + tD with the prism's boundary (core/kernels/prism.h).
   int crossings(const dvec3& O, const dvec3& D, Crossing& first, Crossing& last) const {
     return shared::prismCrossings(p_, O, D, first, last);

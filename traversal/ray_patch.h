@@ -233,10 +233,7 @@ class RayPatch final : public shared::RayPatchLoop<RayPatch<RQ, Inv, Split>>, pu
     lo = inflatedBox_.lo;
     hi = inflatedBox_.hi;
   }
-  int rpPrismCrossings(shared::Crossing& first, shared::Crossing& last) const {
-    return prism_->crossings(this->g_O, this->g_D, first, last);
-  }
-  double rpPrismGrowth() const { return prism_->growth(); }
+  const shared::PrismShape& rpPrism() const { return prism_->shape(); }
   static void rpStat(int what) {
     switch (what) {
       case OBLONG_RP_STAT_ILL_POSED: OBLONG_STAT_INC(travIllPosed); break;

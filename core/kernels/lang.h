@@ -10,6 +10,7 @@
 //   OBLONG_OUT(T)   an out argument         (C++ T&,       GLSL out T)
 //   OBLONG_INOUT(T) an in-out argument      (C++ T&,       GLSL inout T)
 //   OBLONG_IN_ARRAY before an array parameter that is read (C++ const)
+//   OBLONG_INOUT_ARRAY before an array parameter that is read and written (GLSL inout)
 //   OBLONG_OUT_ARRAY before an array parameter that is written (GLSL out; C++ arrays
 //                   are passed by pointer)
 //   OBLONG_FORCE_INLINE on hot C++ paths (GLSL inlines every call anyway)
@@ -113,6 +114,7 @@ inline int findMSB(uint v) { return int(std::bit_width(v)) - 1; }  // GLSL's, fo
 #define OBLONG_INOUT(T) T&
 #define OBLONG_IN_ARRAY const
 #define OBLONG_OUT_ARRAY
+#define OBLONG_INOUT_ARRAY
 #define OBLONG_PRECISE
 #define OBLONG_TEMPLATE1(A) template <typename A>
 #define OBLONG_TEMPLATE2(A, B) template <typename A, typename B>
@@ -128,6 +130,7 @@ inline int findMSB(uint v) { return int(std::bit_width(v)) - 1; }  // GLSL's, fo
 #define OBLONG_INOUT(T) inout T
 #define OBLONG_IN_ARRAY in
 #define OBLONG_OUT_ARRAY out
+#define OBLONG_INOUT_ARRAY inout
 #define OBLONG_PRECISE precise
 #define OBLONG_TEMPLATE1(A)
 #define OBLONG_TEMPLATE2(A, B)

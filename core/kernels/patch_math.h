@@ -138,16 +138,13 @@ OBLONG_INLINE int quadraticRoots(double q2, double q1, double q0, OBLONG_OUT_ARR
 }
 
 
-// The ray parameter t and prism coordinate s where the displacement line through the
-// local point p comes closest to the ray (they meet when ψ(p) = 0): least squares on
-// O + tD = P(p) + s N(p). False when the two lines are parallel (ray along N).
-OBLONG_INLINE bool rayParamAt(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, OBLONG_IN(dvec2) p,
-                              OBLONG_OUT(double) t, OBLONG_OUT(double) s) {
+// The ray parameter t and the line parameter s where the line P + sN comes closest to the
+// ray O + tD (least squares on O + tD = P + sN). False when the two are parallel.
+OBLONG_INLINE bool closestOnLines(OBLONG_IN(dvec3) P, OBLONG_IN(dvec3) N, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
+                                  OBLONG_OUT(double) t, OBLONG_OUT(double) s) {
   t = 0.0;
   s = 0.0;
-  dvec2 b = frameBary(F, p);
-  OBLONG_PRECISE dvec3 A = frameP(F, b) - O;
-  dvec3 N = frameN(F, b);
+  OBLONG_PRECISE dvec3 A = P - O;
   OBLONG_PRECISE double dd = dotD(D, D), nn = dotD(N, N), dn = dotD(D, N);
   OBLONG_PRECISE double den = dd * nn - dn * dn;
   if (!(den > 1e-24 * dd * nn)) return false;
@@ -156,7 +153,16 @@ OBLONG_INLINE bool rayParamAt(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLON
   OBLONG_PRECISE double tt = (nn * da - dn * na) / den, ss = (dn * da - dd * na) / den;
   t = tt;
   s = ss;
-  return finiteD(t) && finiteD(s);
+  return true;
+}
+
+// The ray parameter t and prism coordinate s where the displacement line through the
+// local point p comes closest to the ray (they meet when ψ(p) = 0). False when the two
+// lines are parallel (ray along N).
+OBLONG_INLINE bool rayParamAt(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, OBLONG_IN(dvec2) p,
+                              OBLONG_OUT(double) t, OBLONG_OUT(double) s) {
+  dvec2 b = frameBary(F, p);
+  return closestOnLines(frameP(F, b), frameN(F, b), O, D, t, s) && finiteD(t) && finiteD(s);
 }
 
 // The initial split (paper Alg. 1 line 5): ray parameters in (tIn, tOut) where the curve
@@ -169,47 +175,61 @@ OBLONG_INLINE bool rayParamAt(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLON
 // residual bounds its error, as for any claim). With farB >= 0 the caller knows that the
 // curve's points in (tIn, tOut) have barycentrics within T grown by less than farB: a
 // candidate beyond that by its root's whole error bound is not one of them (another
-// branch of ψ = 0) and is dropped (a NaN one too).
-OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
-                                 double tIn, double tOut, double farB, OBLONG_OUT_ARRAY double ts[4],
-                                 OBLONG_OUT_ARRAY dvec2 bs[4], OBLONG_OUT_ARRAY double ss[4]) {
-  for (int k = 0; k < 4; ++k) {
-    ts[k] = 0.0;
-    bs[k] = dvec2(0.0);
-    ss[k] = 0.0;
-  }
-  int m = 0;
-  for (int L = 0; L < 2; ++L) {
-    // Line a X + b Y + c = 0: ψ_X = 0 is (2cXX, cXY, cX); ψ_Y = 0 is (cXY, 2cYY, cY).
-    OBLONG_PRECISE double a = L == 0 ? 2.0 * psi.cXX : psi.cXY, b = L == 0 ? psi.cXY : 2.0 * psi.cYY,
-                          c = L == 0 ? psi.cX : psi.cY;
-    OBLONG_PRECISE double nn = a * a + b * b;
-    if (!(nn > 0.0)) continue;  // ψ_X (or ψ_Y) constant: no turning point of that kind
-    OBLONG_PRECISE dvec2 Q = -c / nn * dvec2(a, b);
-    OBLONG_PRECISE dvec2 R = dvec2(-b, a) / sqrt(nn);
-    // ψ(Q + τ R) = ψ(Q) + τ ∇ψ(Q)·R + τ² Rᵀ H R / 2, H = [[2cXX, cXY], [cXY, 2cYY]].
-    OBLONG_PRECISE double q0 = psiEval(psi, Q);
-    OBLONG_PRECISE dvec2 g = psiGrad(psi, Q);
-    OBLONG_PRECISE double q1 = g.x * R.x + g.y * R.y;
-    OBLONG_PRECISE double q2 = psi.cXX * R.x * R.x + psi.cXY * R.x * R.y + psi.cYY * R.y * R.y;
-    double tau[2], pad[2];
-    int nr = quadraticRoots(q2, q1, q0, tau, pad);
-    for (int k = 0; k < nr; ++k) {
-      OBLONG_PRECISE dvec2 cand = Q + tau[k] * R;
-      // Its barycentrics, each at its largest over the root's error pad[k] along R.
-      dvec2 bc = frameBary(F, cand);
-      OBLONG_PRECISE dvec2 db = F.bX * R.x + F.bY * R.y;
-      OBLONG_PRECISE dvec3 lam = dvec3(bc.x, bc.y, 1.0 - bc.x - bc.y) + abs(dvec3(db.x, db.y, db.x + db.y)) * pad[k];
-      if (farB >= 0.0 && !(lam.x >= -farB && lam.y >= -farB && lam.z >= -farB)) continue;
-      double t, s;
-      if (!rayParamAt(F, O, D, cand, t, s)) continue;
-      if (!(t > tIn && t < tOut)) continue;
-      ts[m] = t;
-      bs[m] = bc;
-      ss[m] = s;
-      ++m;
-    }
-  }
+// branch of ψ = 0) and is dropped (a NaN one too). Written as its steps (turnLine,
+// turnCandidate, sortSplits), which the traversal's set-up runs in one loop with the
+// prism's walls (core/kernels/ray_patch_body.h, setupCurve).
+
+// Line L of the turning points, a X + b Y + c = 0 (ψ_X = 0 for L = 0: (2cXX, cXY, cX); ψ_Y = 0
+// for L = 1: (cXY, 2cYY, cY)), as Q + τR with |R| = 1, and ψ on it as q2 τ² + q1 τ + q0.
+// False when ψ_X (or ψ_Y) is constant: no turning point of that kind.
+OBLONG_INLINE bool turnLine(OBLONG_IN(Psi) psi, int L, OBLONG_OUT(dvec2) Q, OBLONG_OUT(dvec2) R, OBLONG_OUT(double) q2,
+                            OBLONG_OUT(double) q1, OBLONG_OUT(double) q0) {
+  Q = dvec2(0.0);
+  R = dvec2(0.0);
+  q2 = 0.0;
+  q1 = 0.0;
+  q0 = 0.0;
+  OBLONG_PRECISE double a = L == 0 ? 2.0 * psi.cXX : psi.cXY, b = L == 0 ? psi.cXY : 2.0 * psi.cYY,
+                        c = L == 0 ? psi.cX : psi.cY;
+  OBLONG_PRECISE double nn = a * a + b * b;
+  if (!(nn > 0.0)) return false;
+  OBLONG_PRECISE dvec2 Qv = -c / nn * dvec2(a, b);
+  OBLONG_PRECISE dvec2 Rv = dvec2(-b, a) / sqrt(nn);
+  // ψ(Q + τ R) = ψ(Q) + τ ∇ψ(Q)·R + τ² Rᵀ H R / 2, H = [[2cXX, cXY], [cXY, 2cYY]].
+  OBLONG_PRECISE double p0 = psiEval(psi, Qv);
+  OBLONG_PRECISE dvec2 g = psiGrad(psi, Qv);
+  OBLONG_PRECISE double p1 = g.x * Rv.x + g.y * Rv.y;
+  OBLONG_PRECISE double p2 = psi.cXX * Rv.x * Rv.x + psi.cXY * Rv.x * Rv.y + psi.cYY * Rv.y * Rv.y;
+  Q = Qv;
+  R = Rv;
+  q2 = p2;
+  q1 = p1;
+  q0 = p0;
+  return true;
+}
+
+// The candidate at root τ of ψ on a turning line (error bound pad along R): its barycentrics
+// b and the displacement line there (P(b), N(b)), for the ray's closest point. False when
+// farB >= 0 and b lies beyond T grown by farB at its largest over the error bound.
+OBLONG_INLINE bool turnCandidate(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec2) Q, OBLONG_IN(dvec2) R, double tau, double pad,
+                                 double farB, OBLONG_OUT(dvec2) b, OBLONG_OUT(dvec3) P, OBLONG_OUT(dvec3) N) {
+  OBLONG_PRECISE dvec2 cand = Q + tau * R;
+  // Its barycentrics, each at its largest over the root's error pad along R.
+  dvec2 bc = frameBary(F, cand);
+  b = bc;
+  P = dvec3(0.0);
+  N = dvec3(0.0);
+  OBLONG_PRECISE dvec2 db = F.bX * R.x + F.bY * R.y;
+  OBLONG_PRECISE dvec3 lam = dvec3(bc.x, bc.y, 1.0 - bc.x - bc.y) + abs(dvec3(db.x, db.y, db.x + db.y)) * pad;
+  if (farB >= 0.0 && !(lam.x >= -farB && lam.y >= -farB && lam.z >= -farB)) return false;
+  P = frameP(F, bc);
+  N = frameN(F, bc);
+  return true;
+}
+
+// The splits ts (with bs, ss) sorted by t and made distinct; returns their count.
+OBLONG_INLINE int sortSplits(OBLONG_INOUT_ARRAY double ts[4], OBLONG_INOUT_ARRAY dvec2 bs[4],
+                             OBLONG_INOUT_ARRAY double ss[4], int m) {
   for (int i = 1; i < m; ++i)  // insertion sort (m <= 4)
     for (int j = i; j > 0 && ts[j] < ts[j - 1]; --j) {
       double x = ts[j];
@@ -231,6 +251,37 @@ OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OB
       ++u;
     }
   return u;
+}
+
+OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
+                                 double tIn, double tOut, double farB, OBLONG_OUT_ARRAY double ts[4],
+                                 OBLONG_OUT_ARRAY dvec2 bs[4], OBLONG_OUT_ARRAY double ss[4]) {
+  for (int k = 0; k < 4; ++k) {
+    ts[k] = 0.0;
+    bs[k] = dvec2(0.0);
+    ss[k] = 0.0;
+  }
+  int m = 0;
+  for (int L = 0; L < 2; ++L) {
+    dvec2 Q, R;
+    double q2, q1, q0;
+    if (!turnLine(psi, L, Q, R, q2, q1, q0)) continue;
+    double tau[2], pad[2];
+    int nr = quadraticRoots(q2, q1, q0, tau, pad);
+    for (int k = 0; k < nr; ++k) {
+      dvec2 bc;
+      dvec3 P, N;
+      double t, s;
+      if (!turnCandidate(F, Q, R, tau[k], pad[k], farB, bc, P, N)) continue;
+      if (!closestOnLines(P, N, O, D, t, s) || !finiteD(t) || !finiteD(s)) continue;
+      if (!(t > tIn && t < tOut)) continue;
+      ts[m] = t;
+      bs[m] = bc;
+      ss[m] = s;
+      ++m;
+    }
+  }
+  return sortSplits(ts, bs, ss, m);
 }
 
 // Approximate direction of a ray's texture-space curve in local sample coordinates

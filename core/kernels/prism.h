@@ -40,6 +40,9 @@ OBLONG_INLINE PrismShape prismInflated(OBLONG_IN(PatchFrame) F, double a, double
   return P;
 }
 
+// How far the base triangle is grown beyond T, in barycentrics (prismInflated's delta).
+OBLONG_INLINE double prismGrowth(OBLONG_IN(PrismShape) P) { return -P.bv[0].x; }
+
 // The box of the six vertices: G(b, s) is a convex combination of them (affine in b at
 // fixed s, affine in s at fixed b), so it contains the prism.
 OBLONG_INLINE void prismBox(OBLONG_IN(PrismShape) P, OBLONG_OUT(dvec3) lo, OBLONG_OUT(dvec3) hi) {
@@ -77,18 +80,18 @@ OBLONG_INLINE void addCrossing(double t, OBLONG_IN(dvec2) bary, double s, OBLONG
 }
 
 // Every crossing of the line O + tD with the prism's boundary (2 caps, 3 walls), with a
-// relative tolerance so that grazing and edge crossings are kept. Returns how many were
-// found, and the first and last (the prism's hull along the ray line).
-OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
-                                 OBLONG_OUT(Crossing) first, OBLONG_OUT(Crossing) last) {
-  first.t = 0.0;
-  first.bary = dvec2(0.0);
-  first.s = 0.0;
-  last = first;
-  int count = 0;
-  double tol = 1e-9;
-  OBLONG_PRECISE double sTol = tol * (abs(P.a) + abs(P.b) + 1e-3);
-  // Caps: flat triangles q_k + s n_k (Möller–Trumbore in double).
+// relative tolerance so that grazing and edge crossings are kept: how many were found,
+// and the first and last (the prism's hull along the ray line). Written as its steps
+// (capCrossings; per wall wallQuadratic, its roots, wallLine and wallKeeps), which the
+// traversal's set-up runs in one loop with the turning points' lines
+// (core/kernels/ray_patch_body.h, setupCurve).
+#define OBLONG_PRISM_TOL 1e-9
+
+// Crossings of the two caps, flat triangles q_k + s n_k (Möller–Trumbore in double),
+// recorded into first, last and count.
+OBLONG_INLINE void capCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
+                                OBLONG_INOUT(Crossing) first, OBLONG_INOUT(Crossing) last, OBLONG_INOUT(int) count) {
+  double tol = OBLONG_PRISM_TOL;
   for (int cap = 0; cap < 2; ++cap) {
     double s = cap == 1 ? P.b : P.a;
     OBLONG_PRECISE dvec3 v0 = P.q[0] + s * P.n[0], v1 = P.q[1] + s * P.n[1], v2 = P.q[2] + s * P.n[2];
@@ -107,38 +110,75 @@ OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OB
     OBLONG_PRECISE dvec2 bb = P.bv[0] + b1 * (P.bv[1] - P.bv[0]) + b2 * (P.bv[2] - P.bv[0]);
     addCrossing(t, bb, s, first, last, count);
   }
-  // Walls: the ruled surfaces between the edge's displacement lines. The line at τ meets
-  // the ray where det(O − Pτ, Nτ, D) = 0, a quadratic in τ. Canonical endpoint order.
+}
+
+// Wall e, the ruled surface between the displacement lines of its edge's ends A and B (in
+// the canonical endpoint order): the line at τ ∈ [0, 1] meets the ray where
+// det(O − Pτ, Nτ, D) = 0, the quadratic k2 τ² + k1 τ + k0.
+OBLONG_INLINE void wallQuadratic(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, int e,
+                                 OBLONG_OUT(int) A, OBLONG_OUT(int) B, OBLONG_OUT(double) k2, OBLONG_OUT(double) k1,
+                                 OBLONG_OUT(double) k0) {
+  A = e;
+  B = (e + 1) % 3;
+  if (lexLess(P.q[B], P.n[B], P.q[A], P.n[A])) {
+    int x = A;
+    A = B;
+    B = x;
+  }
+  OBLONG_PRECISE dvec3 c = O - P.q[A], ed = P.q[B] - P.q[A], g = P.n[B] - P.n[A];
+  OBLONG_PRECISE double a0 = det3D(c, P.n[A], D);
+  OBLONG_PRECISE double a1 = det3D(c, g, D) - det3D(ed, P.n[A], D);
+  OBLONG_PRECISE double a2 = -det3D(ed, g, D);
+  k2 = a2;
+  k1 = a1;
+  k0 = a0;
+}
+
+// The wall's displacement line at root τ (error bound pad): its base point Pt, direction Nt
+// and T's barycentrics bb of the base point. False when τ lies beyond the edge.
+OBLONG_INLINE bool wallLine(OBLONG_IN(PrismShape) P, int A, int B, double ta, double pad, OBLONG_OUT(dvec3) Pt,
+                            OBLONG_OUT(dvec3) Nt, OBLONG_OUT(dvec2) bb) {
+  double tol = OBLONG_PRISM_TOL;
+  Pt = dvec3(0.0);
+  Nt = dvec3(0.0);
+  bb = dvec2(0.0);
+  if (ta < -tol - pad || ta > 1.0 + tol + pad) return false;
+  double tc = clamp(ta, 0.0, 1.0);
+  OBLONG_PRECISE dvec3 Pv = P.q[A] + tc * (P.q[B] - P.q[A]), Nv = P.n[A] + tc * (P.n[B] - P.n[A]);
+  OBLONG_PRECISE dvec2 b = P.bv[A] + tc * (P.bv[B] - P.bv[A]);
+  Pt = Pv;
+  Nt = Nv;
+  bb = b;
+  return true;
+}
+
+// Whether the ray's closest point (t, s) on a wall's line is a crossing: s between the
+// caps (with the tolerance) and t finite. (A ray along the line lies in the wall: no
+// closest point, no crossing.)
+OBLONG_INLINE bool wallKeeps(OBLONG_IN(PrismShape) P, double t, double s) {
+  OBLONG_PRECISE double sTol = OBLONG_PRISM_TOL * (abs(P.a) + abs(P.b) + 1e-3);
+  return !(s < P.a - sTol || s > P.b + sTol) && finiteD(t);
+}
+
+OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
+                                 OBLONG_OUT(Crossing) first, OBLONG_OUT(Crossing) last) {
+  first.t = 0.0;
+  first.bary = dvec2(0.0);
+  first.s = 0.0;
+  last = first;
+  int count = 0;
+  capCrossings(P, O, D, first, last, count);
   for (int e = 0; e < 3; ++e) {
-    int A = e, B = (e + 1) % 3;
-    if (lexLess(P.q[B], P.n[B], P.q[A], P.n[A])) {
-      int x = A;
-      A = B;
-      B = x;
-    }
-    OBLONG_PRECISE dvec3 c = O - P.q[A], ed = P.q[B] - P.q[A], g = P.n[B] - P.n[A];
-    OBLONG_PRECISE double k0 = det3D(c, P.n[A], D);
-    OBLONG_PRECISE double k1 = det3D(c, g, D) - det3D(ed, P.n[A], D);
-    OBLONG_PRECISE double k2 = -det3D(ed, g, D);
-    double tau[2], pad[2];
+    int A, B;
+    double k2, k1, k0, tau[2], pad[2];
+    wallQuadratic(P, O, D, e, A, B, k2, k1, k0);
     int nr = quadraticRoots(k2, k1, k0, tau, pad);
     for (int r = 0; r < nr; ++r) {
-      double ta = tau[r];
-      if (ta < -tol - pad[r] || ta > 1.0 + tol + pad[r]) continue;
-      double tc = clamp(ta, 0.0, 1.0);
-      OBLONG_PRECISE dvec3 Pt = P.q[A] + tc * ed, Nt = P.n[A] + tc * g;
-      // Closest points of the ray and the displacement line at τ.
-      OBLONG_PRECISE dvec3 Av = Pt - O;
-      OBLONG_PRECISE double dd = dotD(D, D), nn = dotD(Nt, Nt), dn = dotD(D, Nt);
-      OBLONG_PRECISE double den = dd * nn - dn * dn;
-      if (!(den > 1e-24 * dd * nn)) continue;  // ray along the line: lies in the wall
-      OBLONG_PRECISE double da = dotD(D, Av), na = dotD(Nt, Av);
-      OBLONG_PRECISE double t = (nn * da - dn * na) / den;
-      OBLONG_PRECISE double s = (dn * da - dd * na) / den;
-      if (s < P.a - sTol || s > P.b + sTol) continue;
-      if (!finiteD(t)) continue;
-      OBLONG_PRECISE dvec2 bb = P.bv[A] + tc * (P.bv[B] - P.bv[A]);
-      addCrossing(t, bb, s, first, last, count);
+      dvec3 Pt, Nt;
+      dvec2 bb;
+      double t, s;
+      if (wallLine(P, A, B, tau[r], pad[r], Pt, Nt, bb) && closestOnLines(Pt, Nt, O, D, t, s) && wallKeeps(P, t, s))
+        addCrossing(t, bb, s, first, last, count);
     }
   }
   return count;

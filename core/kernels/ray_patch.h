@@ -44,8 +44,7 @@
 //         local rectangle [lo, hi] at heights h in T's float box frame, padded by
 //         g_texPadF (rect_bounds.h's boxOverRectF)
 //   void  rpInflatedBox(out dvec3 lo, out dvec3 hi)   the inflated prism's box, padded
-//   int   rpPrismCrossings(out Crossing first, out Crossing last)  prism.h's crossings
-//   double rpPrismGrowth()                     the inflated prism's base: T grown by this (barycentric)
+//   PrismShape rpPrism()                       the inflated prism (prism.h)
 //   void  rpStat(int what)                     a statistics event (OBLONG_RP_STAT_*)
 #ifndef OBLONG_KERNELS_RAY_PATCH_H
 #define OBLONG_KERNELS_RAY_PATCH_H

@@ -783,30 +783,75 @@ int setupCurve() {
   double t0 = g_tLo, t1 = g_tHi;
   clipBox(plo, phi, g_O, g_invD, t0, t1);
   if (!(t0 <= t1)) return 0;
+  // 2. Its crossings (prism.h's prismCrossings) and ψ's turning points in (tIn, tOut)
+  // (patch_math.h's monotoneSplits), their five quadratics solved in one loop: the three
+  // walls' (q < 3), then the two turning lines' (one call site each of the quadratic and
+  // of the ray's closest point to a displacement line, which a shader inlines per call).
+  PrismShape P = OBLONG_HOOK(rpPrism)();
   Crossing first, last;
-  int nc = OBLONG_HOOK(rpPrismCrossings)(first, last);
-  if (nc == 0) return 0;  // the line misses the inflated prism
-  if (nc < 2) {
-    OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_GRAZE);
-    return 1;
+  first.t = 0.0;
+  first.bary = dvec2(0.0);
+  first.s = 0.0;
+  last = first;
+  int nc = 0;
+  capCrossings(P, g_O, g_D, first, last, nc);
+  double tIn = 0.0, tOut = 0.0, farB = -1.0;
+  double ts[4], ss[4];
+  dvec2 bs[4];
+  for (int k = 0; k < 4; ++k) {
+    ts[k] = 0.0;
+    bs[k] = dvec2(0.0);
+    ss[k] = 0.0;
   }
-  double tIn = max(first.t, g_tLo);
-  double tOut = min(last.t, g_tHi);
-  if (!(tIn <= tOut)) return 0;
-  g_psi = psiMake(g_F, g_O, g_D);
-  // 2. Monotone pieces, between ψ's turning points, all their ends left pending, made
+  int m = 0;
+  for (int q = 0; q < 5; ++q) {
+    if (q == 3) {  // the crossings are known
+      if (nc == 0) return 0;  // the line misses the inflated prism
+      if (nc < 2) {
+        OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_GRAZE);
+        return 1;
+      }
+      tIn = max(first.t, g_tLo);
+      tOut = min(last.t, g_tHi);
+      if (!(tIn <= tOut)) return 0;
+      g_psi = psiMake(g_F, g_O, g_D);
+      // With two crossings the ray runs inside the inflated prism from the first to the
+      // last, so its curve's points there lie on the prism's base triangle, T grown by
+      // its growth: a candidate more than a whole triangle beyond that lies on another
+      // branch of ψ = 0 (a focal point's: on a sphere every displacement line meets the
+      // centre) and is dropped.
+      farB = nc == 2 ? 1.0 + prismGrowth(P) : -1.0;
+    }
+    int A = 0, B = 0;
+    dvec2 Q = dvec2(0.0), R = dvec2(0.0);
+    double k2, k1, k0;
+    if (q < 3) wallQuadratic(P, g_O, g_D, q, A, B, k2, k1, k0);
+    else if (!turnLine(g_psi, q - 3, Q, R, k2, k1, k0)) continue;
+    double w[2], pad[2];
+    int nr = quadraticRoots(k2, k1, k0, w, pad);
+    for (int r = 0; r < nr; ++r) {
+      dvec3 Pt, Nt;
+      dvec2 bb;
+      double t, s;
+      bool line = q < 3 ? wallLine(P, A, B, w[r], pad[r], Pt, Nt, bb)
+                        : turnCandidate(g_F, Q, R, w[r], pad[r], farB, bb, Pt, Nt);
+      if (!line || !closestOnLines(Pt, Nt, g_O, g_D, t, s)) continue;
+      if (q < 3) {
+        if (wallKeeps(P, t, s)) addCrossing(t, bb, s, first, last, nc);
+      } else if (finiteD(t) && finiteD(s) && t > tIn && t < tOut) {
+        ts[m] = t;
+        bs[m] = bb;
+        ss[m] = s;
+        ++m;
+      }
+    }
+  }
+  int ns = sortSplits(ts, bs, ss, m);
+  // 3. Monotone pieces, between ψ's turning points, all their ends left pending, made
   // by pieceEnd when their piece is popped: the crossings' claims at their prism
   // coordinates; an end inside the prism (where the ray starts or ends) claimed near the
   // chord between the crossings, else inverted; the turning points claimed at their
   // candidates' prism coordinates, else inverted.
-  double ts[4], ss[4];
-  dvec2 bs[4];
-  // With two crossings the ray runs inside the inflated prism from the first to the last,
-  // so its curve's points there lie on the prism's base triangle, T grown by its growth:
-  // a candidate more than a whole triangle beyond that lies on another branch of ψ = 0 (a
-  // focal point's: on a sphere every displacement line meets the centre) and is dropped.
-  double farB = nc == 2 ? 1.0 + OBLONG_HOOK(rpPrismGrowth)() : -1.0;
-  int ns = monotoneSplits(g_F, g_psi, g_O, g_D, tIn, tOut, farB, ts, bs, ss);
   CurvePoint pts[6];
   for (int k = 0; k < 2; ++k) {
     Crossing c = k == 0 ? first : last;

@@ -97,8 +97,7 @@ dvec2 rpToSample(dvec2 uv) { return toSample(uv); }
 // After the driver (they read its state):
 void rpBoxOverRect(vec2 lo, vec2 hi, vec2 h, out vec3 blo, out vec3 bhi);
 void rpInflatedBox(out dvec3 lo, out dvec3 hi);
-int rpPrismCrossings(out Crossing first, out Crossing last);
-double rpPrismGrowth();
+PrismShape rpPrism();
 void rpStat(int what) {}
 
 // ---- the driver --------------------------------------------------------------------------
@@ -136,8 +135,7 @@ void rpInflatedBox(out dvec3 lo, out dvec3 hi) {
   lo -= dvec3(m.boxPad);
   hi += dvec3(m.boxPad);
 }
-int rpPrismCrossings(out Crossing first, out Crossing last) { return prismCrossings(g_P, g_O, g_D, first, last); }
-double rpPrismGrowth() { return -g_P.bv[0].x; }
+PrismShape rpPrism() { return g_P; }
 
 // ClosestHit::test (microcells.glsl calls it per micro-triangle): closed range
 // [tmin, min(tmax, t)], then strict, so that the first of equal-t hits wins.
