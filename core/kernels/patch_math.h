@@ -227,6 +227,15 @@ OBLONG_INLINE bool turnCandidate(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec2) Q, OB
   return true;
 }
 
+OBLONG_INLINE void clearSplits(OBLONG_OUT_ARRAY double ts[4], OBLONG_OUT_ARRAY dvec2 bs[4],
+                               OBLONG_OUT_ARRAY double ss[4]) {
+  for (int k = 0; k < 4; ++k) {
+    ts[k] = 0.0;
+    bs[k] = dvec2(0.0);
+    ss[k] = 0.0;
+  }
+}
+
 // The splits ts (with bs, ss) sorted by t and made distinct; returns their count.
 OBLONG_INLINE int sortSplits(OBLONG_INOUT_ARRAY double ts[4], OBLONG_INOUT_ARRAY dvec2 bs[4],
                              OBLONG_INOUT_ARRAY double ss[4], int m) {
@@ -256,11 +265,7 @@ OBLONG_INLINE int sortSplits(OBLONG_INOUT_ARRAY double ts[4], OBLONG_INOUT_ARRAY
 OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
                                  double tIn, double tOut, double farB, OBLONG_OUT_ARRAY double ts[4],
                                  OBLONG_OUT_ARRAY dvec2 bs[4], OBLONG_OUT_ARRAY double ss[4]) {
-  for (int k = 0; k < 4; ++k) {
-    ts[k] = 0.0;
-    bs[k] = dvec2(0.0);
-    ss[k] = 0.0;
-  }
+  clearSplits(ts, bs, ss);
   int m = 0;
   for (int L = 0; L < 2; ++L) {
     dvec2 Q, R;

@@ -87,10 +87,15 @@ OBLONG_INLINE void addCrossing(double t, OBLONG_IN(dvec2) bary, double s, OBLONG
 // (core/kernels/ray_patch_body.h, setupCurve).
 #define OBLONG_PRISM_TOL 1e-9
 
-// Crossings of the two caps, flat triangles q_k + s n_k (Möller–Trumbore in double),
-// recorded into first, last and count.
+// The crossings of the two caps, flat triangles q_k + s n_k (Möller–Trumbore in double):
+// first, last and their count, the walls' to be added.
 OBLONG_INLINE void capCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
-                                OBLONG_INOUT(Crossing) first, OBLONG_INOUT(Crossing) last, OBLONG_INOUT(int) count) {
+                                OBLONG_OUT(Crossing) first, OBLONG_OUT(Crossing) last, OBLONG_OUT(int) count) {
+  first.t = 0.0;
+  first.bary = dvec2(0.0);
+  first.s = 0.0;
+  last = first;
+  count = 0;
   double tol = OBLONG_PRISM_TOL;
   for (int cap = 0; cap < 2; ++cap) {
     double s = cap == 1 ? P.b : P.a;
@@ -162,11 +167,7 @@ OBLONG_INLINE bool wallKeeps(OBLONG_IN(PrismShape) P, double t, double s) {
 
 OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
                                  OBLONG_OUT(Crossing) first, OBLONG_OUT(Crossing) last) {
-  first.t = 0.0;
-  first.bary = dvec2(0.0);
-  first.s = 0.0;
-  last = first;
-  int count = 0;
+  int count;
   capCrossings(P, O, D, first, last, count);
   for (int e = 0; e < 3; ++e) {
     int A, B;

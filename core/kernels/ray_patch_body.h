@@ -789,20 +789,12 @@ int setupCurve() {
   // of the ray's closest point to a displacement line, which a shader inlines per call).
   PrismShape P = OBLONG_HOOK(rpPrism)();
   Crossing first, last;
-  first.t = 0.0;
-  first.bary = dvec2(0.0);
-  first.s = 0.0;
-  last = first;
-  int nc = 0;
+  int nc;
   capCrossings(P, g_O, g_D, first, last, nc);
   double tIn = 0.0, tOut = 0.0, farB = -1.0;
   double ts[4], ss[4];
   dvec2 bs[4];
-  for (int k = 0; k < 4; ++k) {
-    ts[k] = 0.0;
-    bs[k] = dvec2(0.0);
-    ss[k] = 0.0;
-  }
+  clearSplits(ts, bs, ss);
   int m = 0;
   for (int q = 0; q < 5; ++q) {
     if (q == 3) {  // the crossings are known
