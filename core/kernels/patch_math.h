@@ -165,20 +165,7 @@ OBLONG_INLINE bool rayParamAt(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLON
   return closestOnLines(frameP(F, b), frameN(F, b), O, D, t, s) && finiteD(t) && finiteD(s);
 }
 
-// The initial split (paper Alg. 1 line 5): ray parameters in (tIn, tOut) where the curve
-// may turn, sorted and distinct. Candidates are the points of the conic ψ = 0 on the
-// lines ψ_X = 0 and ψ_Y = 0 (other branches of the conic show up too), each taken to the
-// ray by rayParamAt. The caller finds the curve's point at each (by inversion) and splits
-// [tIn, tOut] there into pieces that are monotone in X and Y. Returns the count (≤ 4);
-// bs and ss: each split's candidate as prism coordinates (its barycentrics and
-// rayParamAt's s), from which the curve point is claimed without an inversion (its
-// residual bounds its error, as for any claim). With farB >= 0 the caller knows that the
-// curve's points in (tIn, tOut) have barycentrics within T grown by less than farB: a
-// candidate beyond that by its root's whole error bound is not one of them (another
-// branch of ψ = 0) and is dropped (a NaN one too). Written as its steps (turnLine,
-// turnCandidate, sortSplits), which the traversal's set-up runs in one loop with the
-// prism's walls (core/kernels/ray_patch_body.h, setupCurve).
-
+// ---- the turning points (monotoneSplits, below), in steps ------------------------------
 // Line L of the turning points, a X + b Y + c = 0 (ψ_X = 0 for L = 0: (2cXX, cXY, cX); ψ_Y = 0
 // for L = 1: (cXY, 2cYY, cY)), as Q + τR with |R| = 1, and ψ on it as q2 τ² + q1 τ + q0.
 // False when ψ_X (or ψ_Y) is constant: no turning point of that kind.
@@ -227,6 +214,7 @@ OBLONG_INLINE bool turnCandidate(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec2) Q, OB
   return true;
 }
 
+// The four splits' slots, zeroed.
 OBLONG_INLINE void clearSplits(OBLONG_OUT_ARRAY double ts[4], OBLONG_OUT_ARRAY dvec2 bs[4],
                                OBLONG_OUT_ARRAY double ss[4]) {
   for (int k = 0; k < 4; ++k) {
@@ -262,6 +250,19 @@ OBLONG_INLINE int sortSplits(OBLONG_INOUT_ARRAY double ts[4], OBLONG_INOUT_ARRAY
   return u;
 }
 
+// The initial split (paper Alg. 1 line 5): ray parameters in (tIn, tOut) where the curve
+// may turn, sorted and distinct. Candidates are the points of the conic ψ = 0 on the
+// lines ψ_X = 0 and ψ_Y = 0 (other branches of the conic show up too), each taken to the
+// ray by rayParamAt. The caller finds the curve's point at each (by inversion) and splits
+// [tIn, tOut] there into pieces that are monotone in X and Y. Returns the count (≤ 4);
+// bs and ss: each split's candidate as prism coordinates (its barycentrics and
+// rayParamAt's s), from which the curve point is claimed without an inversion (its
+// residual bounds its error, as for any claim). With farB >= 0 the caller knows that the
+// curve's points in (tIn, tOut) have barycentrics within T grown by less than farB: a
+// candidate beyond that by its root's whole error bound is not one of them (another
+// branch of ψ = 0) and is dropped (a NaN one too). Written as the steps above, which the
+// traversal's set-up runs in one loop with the prism's walls (core/kernels/ray_patch_body.h,
+// setupCurve).
 OBLONG_INLINE int monotoneSplits(OBLONG_IN(PatchFrame) F, OBLONG_IN(Psi) psi, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
                                  double tIn, double tOut, double farB, OBLONG_OUT_ARRAY double ts[4],
                                  OBLONG_OUT_ARRAY dvec2 bs[4], OBLONG_OUT_ARRAY double ss[4]) {

@@ -79,12 +79,8 @@ OBLONG_INLINE void addCrossing(double t, OBLONG_IN(dvec2) bary, double s, OBLONG
   ++count;
 }
 
-// Every crossing of the line O + tD with the prism's boundary (2 caps, 3 walls), with a
-// relative tolerance so that grazing and edge crossings are kept: how many were found,
-// and the first and last (the prism's hull along the ray line). Written as its steps
-// (capCrossings; per wall wallQuadratic, its roots, wallLine and wallKeeps), which the
-// traversal's set-up runs in one loop with the turning points' lines
-// (core/kernels/ray_patch_body.h, setupCurve).
+// ---- the crossings (prismCrossings, below), in steps -----------------------------------
+// The relative tolerance of the crossings' parameters.
 #define OBLONG_PRISM_TOL 1e-9
 
 // The crossings of the two caps, flat triangles q_k + s n_k (Möller–Trumbore in double):
@@ -165,6 +161,12 @@ OBLONG_INLINE bool wallKeeps(OBLONG_IN(PrismShape) P, double t, double s) {
   return !(s < P.a - sTol || s > P.b + sTol) && finiteD(t);
 }
 
+// Every crossing of the line O + tD with the prism's boundary (2 caps, 3 walls), with a
+// relative tolerance so that grazing and edge crossings are kept: how many were found,
+// and the first and last (the prism's hull along the ray line). Written as the steps above
+// (capCrossings; per wall wallQuadratic, its roots, wallLine and wallKeeps), which the
+// traversal's set-up runs in one loop with the turning points' lines
+// (core/kernels/ray_patch_body.h, setupCurve).
 OBLONG_INLINE int prismCrossings(OBLONG_IN(PrismShape) P, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D,
                                  OBLONG_OUT(Crossing) first, OBLONG_OUT(Crossing) last) {
   int count;
