@@ -28,13 +28,13 @@ MicroCells::MicroCells(const DisplacedTriangle& tri, const Displacement& disp, f
   for (int k = 0; k < 3; ++k) S[k] = d_.toSample(T_.t[k]);
   E_ = sh::mcEdges(S, T_.t);
   for (int k = 0; k < 3; ++k) Tm_.p[k] = T_.p[k], Tm_.n[k] = T_.n[k], Tm_.t[k] = T_.t[k];
-  const glm::mat2& M = T_.uvToBary;
-  Tm_.uvToBary = glm::vec4(M[0][0], M[0][1], M[1][0], M[1][1]);
+  double sum;
+  sh::mcBaryMap(S, Tm_, sum);
   Tm_.scale = d_.scale, Tm_.bias = d_.bias;
 }
 
 MicroVertex MicroCells::gridInterior(int i, int j) const {
-  return sh::mcGridInterior(Tm_, d_.sampleToUV(i, j), d_.raw(i, j, f_));
+  return sh::mcGridInterior(Tm_, i, j, d_.sampleToUV(i, j), d_.raw(i, j, f_));
 }
 
 bool MicroCells::interior(int i, int j) const { return sh::mcInterior(E_, i, j); }

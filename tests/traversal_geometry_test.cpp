@@ -49,6 +49,63 @@ TEST_CASE("MicroCells gives forEachMicroTriangle's triangles bit for bit", "[tra
   }
 }
 
+TEST_CASE("micro-vertices at grid points lie within vertexErr of their exact Eq. 1 points",
+          "[traversal][microgeometry][prism][unit]") {
+  // vertexErr (traversal/prism.cpp) bounds a float micro-vertex's distance from the exact
+  // point (double barycentrics of its sample point, P + h·N/|N| in double): every box and
+  // the march's ε are padded by it. Besides the suites' scenarios, fine texels on a patch
+  // of uv far from 0 (a 64² map tiled 2 000 times, T 0.004 wide in uv at 0.9): there the
+  // grid points' uvs round to a sizeable fraction of a texel, which their barycentrics
+  // must not inherit.
+  std::vector<Scenario> cases = scenarios();
+  for (const Scenario& s : stiffScenarios()) cases.push_back(s);
+  {
+    Mesh m = quadMesh(1.0f, 0.0f, 1);
+    for (vec2& uv : m.uvs) uv = vec2(0.9f, 0.88f) + 0.004f * uv;
+    auto map = std::make_shared<const HeightMap>(proceduralHeightMap(64, 64, 9));
+    cases.push_back({"fine texels", trianglesOf(m), Displacement{map, 0.002f, -0.5f, vec2(2000.0f, 2000.0f)}});
+  }
+  for (const Scenario& s : cases) {
+    const float delta = maxCellDelta(*s.disp.map);
+    size_t points = 0;
+    double worst = 0;  // the largest error over vertexErr
+    for (size_t k = 0; k < s.tris.size(); ++k) {
+      const DisplacedTriangle& T = s.tris[k];
+      const LocalFrame F = LocalFrame::make(T, s.disp);
+      Interval h;
+      forEachMicroTriangle(T, s.disp, [&](const MicroTriangle& m) {
+        for (const auto& v : m.v) h.extend(s.disp.micro(v.uv));
+      });
+      const PrismParams P = analyzeShell(T, s.disp, h, delta);
+      if (!P.valid) continue;
+      // The cells wholly inside T: their two triangles (v00, v10, v11), (v00, v11, v01)
+      // are their corners, grid points computed inside T (MicroCells::cell).
+      const MicroCells mc(T, s.disp);
+      const CellRange r = cellsOverlapping(T, s.disp);
+      MicroTriangle buf[MicroCells::kMaxPerCell];
+      for (int j = r.y0; j <= r.y1; ++j)
+        for (int i = r.x0; i <= r.x1; ++i) {
+          if (!mc.interior(i, j) || mc.cell(i, j, buf) != 2) continue;
+          const MicroVertex* corner[4] = {&buf[0].v[0], &buf[0].v[1], &buf[0].v[2], &buf[1].v[2]};
+          const ivec2 at[4] = {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}};
+          for (int q = 0; q < 4; ++q) {
+            const dvec2 b = F.bary(dvec2(at[q] - F.origin));
+            const double ht = double(s.disp.scale) * (double(s.disp.raw(at[q].x, at[q].y, 0.0f)) + double(s.disp.bias));
+            const dvec3 exact = F.P(b) + ht * glm::normalize(F.N(b));
+            const double err = glm::length(dvec3(corner[q]->p) - exact);
+            worst = std::max(worst, err / P.vertexErr);
+            ++points;
+            INFO(s.name << " triangle " << k << " sample " << at[q].x << ", " << at[q].y << ": error " << err
+                        << ", vertexErr " << P.vertexErr);
+            CHECK(err <= P.vertexErr);
+          }
+        }
+    }
+    CHECK(points > 100);
+    UNSCOPED_INFO(s.name << ": " << points << " grid points, largest error " << worst << " of vertexErr");
+  }
+}
+
 TEST_CASE("prisms contain the micro-geometry and the shell analysis bounds bulge and projection",
           "[traversal][prism]") {
   const Newton newtonD;

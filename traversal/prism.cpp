@@ -1,6 +1,8 @@
 // Bounding prisms and the shell analysis (see prism.h for the reasoning).
 #include "traversal/prism.h"
 
+#include "core/kernels/microcells.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
@@ -117,18 +119,20 @@ PrismParams analyzeShell(const DisplacedTriangle& T, const Displacement& d, cons
   const double H = std::max(std::abs(hmin), std::abs(hmax));
   const double L = std::max({glm::length(F.e1), glm::length(F.e2), glm::length(F.e2 - F.e1)});
 
-  // Float error of the micro-vertices (core/microgeometry.cpp computes them in float):
-  // rounding of uv, of T.uvToBary (float) and of (uv - t0) gives a barycentric error db;
-  // P, N and normalize add a few ulps; edge crossings round their parameter to float.
-  double maxP = 0, maxUV = 0, uvSpan = 0;
-  for (int k = 0; k < 3; ++k) {
-    maxP = std::max(maxP, maxAbs(dvec3(T.p[k])));
-    maxUV = std::max({maxUV, std::abs(double(T.t[k].x)), std::abs(double(T.t[k].y))});
-    uvSpan = std::max({uvSpan, std::abs(double(T.t[k].x - T.t[0].x)), std::abs(double(T.t[k].y - T.t[0].y))});
-  }
-  const glm::mat2& M = T.uvToBary;
-  const double normM = std::max(std::abs(M[0][0]) + std::abs(M[1][0]), std::abs(M[0][1]) + std::abs(M[1][1]));
-  const double db = normM * kUlpF * (2 * maxUV + 8 * uvSpan) + 4 * kUlpF;
+  // Float error of the micro-vertices (core/kernels/microcells.h computes them in float):
+  // a grid point's barycentrics are McTri's float map at its integer offset (mcBaryMap:
+  // the map's three coefficients rounded, the offsets' conversion, two products and two
+  // sums, each at most one rounding of a term bounded by `sum`: 6 ulps of it, with the
+  // double map's own error far below); an edge crossing rounds its parameter to float and
+  // takes 1 - t (4 ulps). P, N and normalize add a few ulps.
+  double maxP = 0;
+  for (int k = 0; k < 3; ++k) maxP = std::max(maxP, maxAbs(dvec3(T.p[k])));
+  dvec2 S[3];
+  for (int k = 0; k < 3; ++k) S[k] = d.toSample(T.t[k]);
+  shared::McTri scratch{};
+  double sum = 0;
+  shared::mcBaryMap(S, scratch, sum);
+  const double db = 6 * kUlpF * sum + 4 * kUlpF;
   const double sumE = glm::length(F.e1) + glm::length(F.e2) + glm::length(F.e2 - F.e1);
   const double sumF = glm::length(F.f1) + glm::length(F.f2) + glm::length(F.f2 - F.f1);
   const double errN = 20 * kUlpF + sumF * db;

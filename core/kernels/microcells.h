@@ -69,7 +69,12 @@ struct McEdges {
 struct McTri {
   vec3 p[3], n[3];
   vec2 t[3];
-  vec4 uvToBary;  // glm::mat2 columns: m[0][0], m[0][1], m[1][0], m[1][1]
+  // T's barycentrics (u, v) of sample point (i, j): bc + bX·(i − origin.x) + bY·(j − origin.y),
+  // an affine map computed in double from T's sample coordinates (mcBaryMap) and rounded
+  // to float: a grid point's barycentrics come from its integer offset, not from its
+  // rounded uv (whose rounding, at a fine texel, was most of the micro-vertices' error).
+  vec2 bc, bX, bY;
+  ivec2 origin;
   float scale, bias;
 };
 
@@ -121,6 +126,31 @@ OBLONG_INLINE McEdges mcEdges(OBLONG_IN_ARRAY dvec2 S[3], OBLONG_IN_ARRAY vec2 t
     E.least[e] = ivec2(E.sigma[e] * d.y < 0.0 ? 0 : 1, E.sigma[e] * d.x > 0.0 ? 0 : 1);
   }
   return E;
+}
+
+// McTri's barycentric map from T's vertices S in sample coordinates: the exact inverse of
+// the affine map b -> S (in double, then rounded to float), anchored at the sample below
+// and left of T's lowest coordinates, so that a grid point's offsets from it are small
+// integers. sum bounds |bc| + |bX|·x + |bY|·y per component over T's sample box (x, y its
+// offsets from the anchor), the scale of the float evaluation's error
+// (traversal/prism.cpp, vertexErr).
+OBLONG_INLINE void mcBaryMap(OBLONG_IN_ARRAY dvec2 S[3], OBLONG_INOUT(McTri) T, OBLONG_OUT(double) sum) {
+  double lim = 1e9;  // keeps the int conversion defined for absurd tilings
+  dvec2 lo = min(min(S[0], S[1]), S[2]), hi = max(max(S[0], S[1]), S[2]);
+  ivec2 o = ivec2(int(clamp(floor(lo.x), -lim, lim)), int(clamp(floor(lo.y), -lim, lim)));
+  OBLONG_PRECISE dvec2 sU = S[1] - S[0], sV = S[2] - S[0];
+  OBLONG_PRECISE double det = sU.x * sV.y - sU.y * sV.x;
+  double id = det != 0.0 ? 1.0 / det : 0.0;
+  OBLONG_PRECISE dvec2 bX = dvec2(sV.y * id, -sU.y * id), bY = dvec2(-sV.x * id, sU.x * id);
+  OBLONG_PRECISE dvec2 s0 = S[0] - dvec2(o);
+  OBLONG_PRECISE dvec2 bc = -(bX * s0.x + bY * s0.y);
+  T.bc = vec2(bc);
+  T.bX = vec2(bX);
+  T.bY = vec2(bY);
+  T.origin = o;
+  OBLONG_PRECISE dvec2 ext = max(hi - dvec2(o), dvec2(0.0)) + 1.0;
+  OBLONG_PRECISE dvec2 m = abs(bc) + abs(bX) * ext.x + abs(bY) * ext.y;
+  sum = max(m.x, m.y);
 }
 
 // sigma·orient of p against edge e.
@@ -300,19 +330,19 @@ OBLONG_INLINE McPre mcOnEdgePre(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, int e,
   return mcPre(P, N, uv, raw);
 }
 
-// A grid point not on any edge of T, at texture coordinates uv (Displacement::sampleToUV)
-// with raw height raw: T's barycentrics of its uv, T's P and N there.
-OBLONG_FORCE_INLINE McPre mcGridPre(OBLONG_IN(McTri) T, OBLONG_IN(vec2) uv, float raw) {
-  OBLONG_PRECISE vec2 q = uv - T.t[0];
-  vec4 m = T.uvToBary;
-  OBLONG_PRECISE vec2 b = vec2(m.x * q.x + m.z * q.y, m.y * q.x + m.w * q.y);
+// A grid point (i, j) not on any edge of T, at texture coordinates uv
+// (Displacement::sampleToUV) with raw height raw: T's barycentrics of the sample point
+// (McTri's map), T's P and N there.
+OBLONG_FORCE_INLINE McPre mcGridPre(OBLONG_IN(McTri) T, int i, int j, OBLONG_IN(vec2) uv, float raw) {
+  float x = float(i - T.origin.x), y = float(j - T.origin.y);
+  OBLONG_PRECISE vec2 b = T.bc + T.bX * x + T.bY * y;
   OBLONG_PRECISE float w = 1.0f - b.x - b.y;
   OBLONG_PRECISE vec3 P = w * T.p[0] + b.x * T.p[1] + b.y * T.p[2];
   OBLONG_PRECISE vec3 N = w * T.n[0] + b.x * T.n[1] + b.y * T.n[2];
   return mcPre(P, N, uv, raw);
 }
-OBLONG_FORCE_INLINE McVertex mcGridInterior(OBLONG_IN(McTri) T, OBLONG_IN(vec2) uv, float raw) {
-  return mcVertexAt(T, mcGridPre(T, uv, raw));
+OBLONG_FORCE_INLINE McVertex mcGridInterior(OBLONG_IN(McTri) T, int i, int j, OBLONG_IN(vec2) uv, float raw) {
+  return mcVertexAt(T, mcGridPre(T, i, j, uv, raw));
 }
 
 // Raw height on grid line (type, c) at sample point s: linear between the line's samples.
@@ -406,7 +436,7 @@ OBLONG_INLINE McVertex mcWorld(OBLONG_IN(McTri) T, OBLONG_IN(McEdges) E, McHeigh
     OBLONG_PRECISE float r = h[0] + f * (h[1] - h[0]);
     raw = r;
   }
-  McPre q = grid ? mcGridPre(T, mcGridUV(hs, v.a, v.b), raw) : mcOnEdgePre(T, E, edge, t, raw);
+  McPre q = grid ? mcGridPre(T, v.a, v.b, mcGridUV(hs, v.a, v.b), raw) : mcOnEdgePre(T, E, edge, t, raw);
   return mcVertexAt(T, q);
 }
 
