@@ -124,7 +124,10 @@ PrismParams analyzeShell(const DisplacedTriangle& T, const Displacement& d, cons
   // the map's three coefficients rounded, the offsets' conversion, two products and two
   // sums, each at most one rounding of a term bounded by `sum`: 6 ulps of it, with the
   // double map's own error far below); an edge crossing rounds its parameter to float and
-  // takes 1 - t (4 ulps). P, N and normalize add a few ulps.
+  // takes 1 - t (4 ulps). P = w·p0 + u·p1 + v·p2 rounds three products and two sums of
+  // terms whose magnitudes add up to at most maxP (b inside T), and w = 1 − u − v twice: at
+  // most 6 ulps of maxP per coordinate, √3·6 < 12 of them in length; N and normalize add a
+  // few ulps of H.
   double maxP = 0;
   for (int k = 0; k < 3; ++k) maxP = std::max(maxP, maxAbs(dvec3(T.p[k])));
   dvec2 S[3];
@@ -136,7 +139,7 @@ PrismParams analyzeShell(const DisplacedTriangle& T, const Displacement& d, cons
   const double sumE = glm::length(F.e1) + glm::length(F.e2) + glm::length(F.e2 - F.e1);
   const double sumF = glm::length(F.f1) + glm::length(F.f2) + glm::length(F.f2 - F.f1);
   const double errN = 20 * kUlpF + sumF * db;
-  P.vertexErr = 2.0 * (8 * kUlpF * 3 * maxP + sumE * db + H * (2 * errN / m + 6 * kUlpF) + kUlpF * (maxP + H) +
+  P.vertexErr = 2.0 * (12 * kUlpF * maxP + sumE * db + H * (2 * errN / m + 6 * kUlpF) + kUlpF * (maxP + H) +
                        2 * kUlpF * (sumE + H * sumF / m));
 
   // Exact prism bounds (Embree).
