@@ -112,9 +112,13 @@ std::vector<char> dirtyPixels(int a0, int a1, int size, int f, int n) {
 }  // namespace
 
 size_t Rmip::Layout::scratchBytes() const {
-  if (scheme == Scheme::Pairs) return size_t(rh) * ((size_t(rw) + 1) / 2) * entryBytes();
+  // The tiling pass (tileLayers) copies one layer at a time.
+  size_t largest = 0;
+  for (const Layer& l : layers) largest = std::max(largest, size_t(shared::rmipLayerEntries(l.nx, l.ny)));
+  if (scheme == Scheme::Pairs) return std::max(size_t(rh) * ((size_t(rw) + 1) / 2), largest) * entryBytes();
   // Corners: row and column passes in float pairs, plus the float entries before encoding.
-  return 4 * size_t(rw) * rh * sizeof(Interval) + (bits == 16 ? entries * sizeof(Interval) : 0);
+  return 4 * size_t(rw) * rh * sizeof(Interval) + (bits == 16 ? entries * sizeof(Interval) : 0) +
+         largest * sizeof(Interval);
 }
 
 Rmip::Layout Rmip::layout(int W, int H, const QueryNeeds& needs, const Options& o) {
@@ -152,7 +156,7 @@ Rmip::Layout Rmip::layout(int W, int H, const QueryNeeds& needs, const Options& 
         e.ny = cornerEntries(L.rh, q, e.shiftY, L.wrap);
       }
       e.offset = uint32_t(L.entries);
-      L.entries += size_t(e.nx) * e.ny;
+      L.entries += (size_t(e.nx) + 3) / 4 * ((size_t(e.ny) + 3) / 4) * 16;  // whole 4 x 4 tiles
     }
   return L;
 }
@@ -214,6 +218,29 @@ T joinSources(const T* base, ptrdiff_t stride, const int* src, int m, T empty, c
   T v = empty;
   for (int t = 0; t < m; ++t) v = join(v, base[src[t] * stride]);
   return v;
+}
+
+shared::RmipLayerRef layerRef(const Rmip::Layer& L) { return {L.offset, L.nx, L.shiftX, L.shiftY}; }
+
+// The builders fill each layer row by row (entry (i, j) at offset + j nx + i); the query
+// reads it in 4 x 4 tiles (core/kernels/rmip_query.h). Moves every layer to the tiled
+// order in place, the padding entries empty.
+template <typename T>
+void tileLayers(T* data, const std::vector<Rmip::Layer>& layers, T empty) {
+  std::vector<T> rows;
+  for (const Rmip::Layer& L : layers) {
+    if (L.nx == 0 || L.ny == 0) continue;
+    rows.assign(data + L.offset, data + L.offset + size_t(L.nx) * L.ny);
+    const shared::RmipLayerRef ref = layerRef(L);
+    const int tilesY = (L.ny + 3) / 4;
+    parallelRows(tilesY, [&](int ty) {
+      for (int j = 4 * ty; j < 4 * ty + 4; ++j) {
+        const uint32_t base = shared::rmipRowBase(ref, j);
+        for (int i = 0; i < 4 * ((L.nx + 3) / 4); ++i)
+          data[base + shared::rmipColumn(i)] = i < L.nx && j < L.ny ? rows[size_t(j) * L.nx + i] : empty;
+      }
+    }, 64);
+  }
 }
 
 }  // namespace
@@ -314,11 +341,13 @@ void Rmip::buildPairs(T* data, const Enc& enc) {
       }, 8);
     }
   }
+  tileLayers(data, layers_, empty);
 }
 
 void Rmip::buildCorners() {
   const HeightMap& m = map();
-  UninitVector<Interval> data(layers_.empty() ? 0 : size_t(layers_.back().offset) + size_t(layers_.back().nx) * layers_.back().ny);
+  UninitVector<Interval> data(layers_.empty() ? 0 : size_t(layers_.back().offset) +
+                                                      shared::rmipLayerEntries(layers_.back().nx, layers_.back().ny));
 
   // Base pixels: min/max over each f x f block of samples (clipped to the map).
   std::vector<Interval> rowR(size_t(rw_) * rh_), rowNext(rowR.size());
@@ -367,6 +396,7 @@ void Rmip::buildCorners() {
       });
     }
   }
+  tileLayers(data.data(), layers_, Interval{});
   if (bits_ == 32) {
     f32_ = std::move(data);
     return;
@@ -404,6 +434,9 @@ void Rmip::updatePairs(T* data, const Enc& enc, const SampleRange& changed) {
   const T empty = emptyT<T>();
   auto join = [](const T& a, const T& b) { return joinT(a, b); };
   auto layer = [&](int p, int q) -> const Layer& { return layers_[size_t(p) * (Q_ + 1) + q]; };
+  auto at = [&](const Layer& L, int i, int j) -> T& {  // the entries are tiled
+    return data[shared::rmipRowBase(layerRef(L), j) + shared::rmipColumn(i)];
+  };
   auto pix = [&](int i, int j) -> T {
     Interval v;
     for (int y = j * f_; y < std::min((j + 1) * f_, m.height()); ++y)
@@ -421,7 +454,7 @@ void Rmip::updatePairs(T* data, const Enc& enc, const SampleRange& changed) {
         T v = empty;
         for (int b = 0; b < ky; ++b)
           for (int a = 0; a < kx; ++a) v = join(v, pix(sx[a], sy[b]));
-        data[L.offset + size_t(j) * L.nx + i] = v;
+        at(L, i, j) = v;
       }
     }
   }
@@ -430,8 +463,11 @@ void Rmip::updatePairs(T* data, const Enc& enc, const SampleRange& changed) {
     const Layer& F = layer(1, q - 1);
     for (int j : dy[size_t(q)]) {
       const int ky = Y.sources(q, j, sy);
-      for (int i : dx[1])
-        data[L.offset + size_t(j) * L.nx + i] = joinSources(data + F.offset + i, F.nx, sy, ky, empty, join);
+      for (int i : dx[1]) {
+        T v = empty;
+        for (int t = 0; t < ky; ++t) v = join(v, at(F, i, sy[t]));
+        at(L, i, j) = v;
+      }
     }
   }
   for (int p = 2; p <= P_; ++p)
@@ -441,7 +477,9 @@ void Rmip::updatePairs(T* data, const Enc& enc, const SampleRange& changed) {
       for (int j : dy[size_t(q)])
         for (int i : dx[size_t(p)]) {
           const int kx = X.sources(p, i, sx);
-          data[L.offset + size_t(j) * L.nx + i] = joinSources(data + F.offset + size_t(j) * F.nx, 1, sx, kx, empty, join);
+          T v = empty;
+          for (int t = 0; t < kx; ++t) v = join(v, at(F, sx[t], j));
+          at(L, i, j) = v;
         }
     }
 }
@@ -455,7 +493,7 @@ nlohmann::json Rmip::describeLayout() const {
     nlohmann::json row = nlohmann::json::array();
     for (int q = 0; q <= Q_; ++q) {
       const Layer& l = layers_[size_t(p) * (Q_ + 1) + q];
-      row.push_back(size_t(l.nx) * size_t(l.ny) * eb);
+      row.push_back(size_t(shared::rmipLayerEntries(l.nx, l.ny)) * eb);
     }
     bytes.push_back(std::move(row));
   }

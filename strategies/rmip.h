@@ -57,7 +57,7 @@ class Rmip final : public RangeQueryImpl<Rmip> {
     Interval quantRange{};  // 16-bit codes' range; empty: Quantizer16::rangeFor(map range)
   };
   struct Layer {
-    uint32_t offset;  // into the entries, in entries
+    uint32_t offset;  // into the entries, in entries (stored in 4 x 4 tiles: rmipRowBase)
     int nx, ny;       // entries per row / column (0: layer not stored)
     int shiftX, shiftY;  // corner x is looked up at entry x >> shiftX
   };

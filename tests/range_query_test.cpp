@@ -351,6 +351,47 @@ TEST_CASE("range queries build only what the scene needs (invariant 4)", "[range
   CHECK(QueryNeeds::forRects(disp, {Rect{vec2(0.0f, 0.5f), vec2(0.1f, 0.6f)}}).wrap);  // cell left of texel 0
 }
 
+TEST_CASE("rmip stores each layer in 4 x 4 tiles of entries, the padding empty", "[range_query][rmip][unit]") {
+  // The query's 2 x 2 corner entries share a cache line when they share a tile: entry
+  // (ex, ey) of a layer lies in tile (ex / 4, ey / 4), tiles row after row, 16 entries each.
+  auto map = randomMap(100, 37, 21);
+  Displacement disp;
+  disp.map = map;
+  for (const json& params : {json::object(), json{{"layout", "corners"}, {"compression", 1}}}) {
+    CAPTURE(params.dump());
+    ParamSet ps(params, "test");
+    auto rq = createRangeQuery("rmip", ps, {disp, QueryNeeds::all(*map)});
+    const auto* r = dynamic_cast<const Rmip*>(rq.get());
+    REQUIRE(r);
+    const std::vector<uint32_t> words = r->words();
+    std::vector<char> used(words.size(), 0);
+    size_t layers = 0;
+    for (const Rmip::Layer& L : r->layerTable()) {
+      if (L.nx == 0) continue;
+      ++layers;
+      const int tilesX = (L.nx + 3) / 4, tilesY = (L.ny + 3) / 4;
+      for (int ey = 0; ey < L.ny; ++ey)
+        for (int ex = 0; ex < L.nx; ++ex) {
+          const uint32_t e = shared::rmipRowBase({L.offset, L.nx, L.shiftX, L.shiftY}, ey) + shared::rmipColumn(ex);
+          const uint32_t tile = (ey / 4) * tilesX + ex / 4, within = (ey % 4) * 4 + ex % 4;
+          REQUIRE(e == L.offset + 16 * tile + within);
+          REQUIRE(e < words.size());
+          CHECK(used[e] == 0);
+          used[e] = 1;
+        }
+      CHECK(shared::rmipLayerEntries(L.nx, L.ny) == uint32_t(16 * tilesX * tilesY));
+    }
+    CHECK(layers > 4);
+    size_t padding = 0;
+    for (size_t e = 0; e < words.size(); ++e)
+      if (!used[e]) {
+        ++padding;
+        CHECK(words[e] == kEmpty16);  // 16-bit codes: the empty pair
+      }
+    CHECK(padding > 0);  // 100 x 37 pixels: layers whose width or height is not a multiple of 4
+  }
+}
+
 TEST_CASE("update after an edit equals a full build, bit for bit", "[range_query][update][rmip][minmax_mipmap][safety_zones]") {
   // Every registered strategy with its defaults, and rmip's other layouts and storages;
   // maps of odd and power-of-two sizes, in [0, 1] (the fixed 16-bit range) and beyond it

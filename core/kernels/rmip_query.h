@@ -35,6 +35,19 @@ struct RmipLayerRef {
   int nx, shiftX, shiftY;
 };
 
+// Where entry (ex, ey) of a layer lies: each layer is stored in tiles of 4 x 4 entries, row
+// after row of tiles (a tile is one 64-byte line of 16-bit code pairs), so that a query's
+// 2 x 2 corner entries share a line 9 times in 16 instead of never sharing one across two
+// rows; the layer's storage is padded to whole tiles. The builders (strategies/rmip.cpp)
+// place entries with the same two functions.
+OBLONG_INLINE uint rmipRowBase(OBLONG_IN(RmipLayerRef) L, int ey) {
+  uint tilesX = uint(L.nx + 3) >> 2u;
+  return L.offset + (uint(ey) >> 2u) * tilesX * 16u + (uint(ey) & 3u) * 4u;
+}
+OBLONG_INLINE uint rmipColumn(int ex) { return (uint(ex) >> 2u) * 16u + (uint(ex) & 3u); }
+// Entries a layer of nx x ny entries stores (whole tiles).
+OBLONG_INLINE uint rmipLayerEntries(int nx, int ny) { return (uint(nx + 3) >> 2u) * (uint(ny + 3) >> 2u) * 16u; }
+
 #ifndef __cplusplus
 // The includer's functions (above), defined after this header.
 RmipLayerRef rmipLayer(RmipAccess a, int index);
@@ -68,11 +81,11 @@ OBLONG_FORCE_INLINE bool rmipBlock(OBLONG_IN(RmipAccess) a, OBLONG_IN(RmipGeom) 
   for (int cy = y0;; cy += ly) {
     bool lastY = cy + ly - 1 >= y1;
     if (lastY) cy = max(y1 - ly + 1, y0);
-    uint row = L.offset + uint((cy >= g.rh ? cy - g.rh : cy) >> L.shiftY) * uint(L.nx);
+    uint row = rmipRowBase(L, (cy >= g.rh ? cy - g.rh : cy) >> L.shiftY);
     for (int cx = x0;; cx += lx) {
       bool lastX = cx + lx - 1 >= x1;
       if (lastX) cx = max(x1 - lx + 1, x0);
-      rmipJoin(a, row + uint((cx >= g.rw ? cx - g.rw : cx) >> L.shiftX), acc);
+      rmipJoin(a, row + rmipColumn((cx >= g.rw ? cx - g.rw : cx) >> L.shiftX), acc);
       if (lastX) break;
     }
     if (lastY) break;

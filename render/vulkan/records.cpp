@@ -95,6 +95,9 @@ void appendTraversal(GpuRecords& R, MeshGpu& m, const Intersector& is, const Int
   const auto* rmip = dynamic_cast<const Rmip*>(rq);
   if (!rmip) fail("--device vulkan", "internal: the canonical intersector's range query is not rmip");
   const RmipLayout L = RmipLayout::of(*rmip);
+  // Each mesh's entries start on a 128-byte boundary, so that its 4 x 4 tiles of entries
+  // (core/kernels/rmip_query.h) stay whole lines.
+  R.rmipData.resize((R.rmipData.size() + 31) / 32 * 32, 0u);
   m.rmipData = uint32_t(R.rmipData.size());
   m.rmipLayers = uint32_t(R.rmipLayers.size());
   m.rmipF = L.f, m.rmipW = L.rw, m.rmipH = L.rh, m.rmipP = L.P, m.rmipQ = L.Q, m.rmipWrap = L.wrap;
