@@ -51,8 +51,8 @@ class Quadtree final : public SplitterImpl<Quadtree> {
     for (int k = 0; k < 2; ++k) {
       const int axis = k == 0 ? first : 1 - first;
       // Strictly between the endpoints so that the monotone curve crosses it.
-      const double x0 = std::min(p.a.uv[axis], p.b.uv[axis]) + origin[axis];
-      const double x1 = std::max(p.a.uv[axis], p.b.uv[axis]) + origin[axis];
+      const double x0 = double(std::min(p.a.uv[axis], p.b.uv[axis])) + origin[axis];
+      const double x1 = double(std::max(p.a.uv[axis], p.b.uv[axis])) + origin[axis];
       const double c = alignedSplit(x0, x1);
       if (std::isfinite(c) && ctx.crossing(p, axis, c - origin[axis], m)) {
         split::around(p, m, front, back);

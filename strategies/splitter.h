@@ -42,17 +42,18 @@
 namespace oblong {
 
 // A point of the ray's curve: ray parameter, local sample coordinates, error radius
-// (core/kernels/curve_point.h, shared with the Vulkan shaders), zero when made here.
+// (core/kernels/curve_point.h, shared with the Vulkan shaders), zero when made here: t
+// in double, uv in float, pad (float) covering uv's rounding.
 struct CurvePoint : shared::CurvePoint {
-  CurvePoint() : shared::CurvePoint{0.0, dvec2(0.0), dvec2(0.0)} {}
+  CurvePoint() : shared::CurvePoint{0.0f, vec2(0.0f), vec2(0.0f)} {}
 };
 
 // A monotone piece of the curve from a (front) to b (back).
 struct CurvePiece {
   CurvePoint a, b;
-  // Bounding rectangle (padded endpoints).
-  dvec2 lo() const { return glm::min(a.uv - a.pad, b.uv - b.pad); }
-  dvec2 hi() const { return glm::max(a.uv + a.pad, b.uv + b.pad); }
+  // Bounding rectangle (padded endpoints), in double.
+  dvec2 lo() const { return shared::pieceLo(a, b); }
+  dvec2 hi() const { return shared::pieceHi(a, b); }
 };
 
 // What a splitter may ask about the current ray and triangle.
@@ -102,8 +103,7 @@ inline int longerAxis(const CurvePiece& p) {
 // True when c lies strictly between the endpoints' coordinates on `axis` (so the
 // monotone curve crosses {axis = c} exactly once).
 inline bool strictlyBetween(const CurvePiece& p, int axis, double c) {
-  const double x0 = std::min(p.a.uv[axis], p.b.uv[axis]), x1 = std::max(p.a.uv[axis], p.b.uv[axis]);
-  return c > x0 && c < x1;
+  return shared::strictlyBetween(p.a, p.b, axis, c);
 }
 // Crossing of the line in the middle of the longer side, else of the other side
 // (core/kernels/midpoint2d.h, as the Vulkan shader cuts).

@@ -47,7 +47,7 @@ class Thirds final : public SplitterImpl<Thirds> {
   template <typename Ctx>
   bool splitFast(const CurvePiece& p, Ctx& ctx, CurvePiece& front, CurvePiece& back) const {
     const int ax = split::longerAxis(p);
-    const double c = p.a.uv[ax] + (p.b.uv[ax] - p.a.uv[ax]) / 3.0;
+    const double c = double(p.a.uv[ax]) + (double(p.b.uv[ax]) - double(p.a.uv[ax])) / 3.0;
     CurvePoint m;
     if (!split::strictlyBetween(p, ax, c) || !ctx.crossing(p, ax, c, m))
       if (!ctx.pointAt(p, (2.0 * p.a.t + p.b.t) / 3.0, m)) return false;

@@ -170,6 +170,97 @@ TEST_CASE("prisms contain the micro-geometry and the shell analysis bounds bulge
   }
 }
 
+TEST_CASE("a made curve point's stored uv and pad hold the ray point's exact projection",
+          "[traversal][claims][unit]") {
+  // makePoint stores a point's uv in float with a pad (float, rounded up) that must cover
+  // both the claim's error (from its residual) and uv's rounding. Claims (b, s) off the
+  // exact projection by 10^-12 to 10^-3 on every suite's triangles and the stiff ones;
+  // the ray point X = O + t·D exact in long double, its projection (b*, s*) on T's frame
+  // by Newton in long double; every accepted point's |uv* − uv| must be within its pad.
+  std::vector<Scenario> cases = scenarios();
+  for (const Scenario& s : stiffScenarios()) cases.push_back(s);
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  auto logU = [&](double lo, double hi) { return lo * std::pow(hi / lo, U(rng)); };
+  using LD = long double;
+  size_t allAccepted = 0, roundingDecides = 0;
+  for (const Scenario& s : cases) {
+    const Interval heights = s.disp.toHeight(s.disp.map->range());
+    const float delta = maxCellDelta(*s.disp.map);
+    size_t accepted = 0, claims = 0;
+    double worst = 0;  // the largest |uv* − uv| over pad
+    for (size_t k = 0; k < s.tris.size(); k += std::max<size_t>(1, s.tris.size() / 40)) {
+      const DisplacedTriangle& T = s.tris[k];
+      const PrismParams P = analyzeShell(T, s.disp, heights, delta);
+      if (!P.valid || !P.wellPosed) continue;
+      const LocalFrame F = LocalFrame::make(T, s.disp);
+      const shared::ClaimBounds K{P.domainB, P.domainS0, P.domainS1, P.kb, P.ks, P.kxy};
+      for (int q = 0; q < 60; ++q) {
+        // A point of the prism, a ray through it.
+        double u = U(rng), v = U(rng);
+        if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+        const double s0 = P.a + (P.b - P.a) * U(rng);
+        const dvec3 X0 = F.P(dvec2(u, v)) + s0 * F.N(dvec2(u, v));
+        const dvec3 D = dvec3(randomDir(rng));
+        const double t = logU(0.01, 100.0);
+        const dvec3 O = X0 - t * D;
+        LD X[3], G[3], J[3][3];
+        for (int i = 0; i < 3; ++i) X[i] = LD(O[i]) + LD(t) * LD(D[i]);
+        // Newton in long double on G(b, s) = X from (u, v, s0).
+        LD bu = u, bv = v, bs = s0;
+        for (int it = 0; it < 8; ++it) {
+          for (int i = 0; i < 3; ++i) {
+            const LD Ni = LD(F.n0[i]) + LD(F.f1[i]) * bu + LD(F.f2[i]) * bv;
+            G[i] = LD(F.p0[i]) + LD(F.e1[i]) * bu + LD(F.e2[i]) * bv + bs * Ni - X[i];
+            J[i][0] = LD(F.e1[i]) + bs * LD(F.f1[i]);
+            J[i][1] = LD(F.e2[i]) + bs * LD(F.f2[i]);
+            J[i][2] = Ni;
+          }
+          auto det3 = [](LD a[3][3]) {
+            return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                   a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+          };
+          const LD det = det3(J);
+          LD dx[3];
+          for (int c = 0; c < 3; ++c) {
+            LD M[3][3];
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j) M[i][j] = j == c ? G[i] : J[i][j];
+            dx[c] = det3(M) / det;
+          }
+          bu -= dx[0], bv -= dx[1], bs -= dx[2];
+        }
+        const LD exactX = LD(F.sc.x) + LD(F.sU.x) * bu + LD(F.sV.x) * bv;
+        const LD exactY = LD(F.sc.y) + LD(F.sU.y) * bu + LD(F.sV.y) * bv;
+        // A claim off by up to 10^-3 in b and s (relative to the prism's height).
+        const double e = logU(1e-12, 1e-3);
+        const dvec2 b(double(bu) + e * (2.0 * U(rng) - 1.0), double(bv) + e * (2.0 * U(rng) - 1.0));
+        const double sc = double(bs) + e * (2.0 * U(rng) - 1.0) * (P.b - P.a + 1e-3);
+        shared::CurvePoint m;
+        ++claims;
+        if (!shared::makePoint(F, K, O, D, t, b, sc, m)) continue;
+        ++accepted;
+        const double ex = double(std::abs(exactX - LD(m.uv.x))), ey = double(std::abs(exactY - LD(m.uv.y)));
+        worst = std::max(worst, std::max(ex / double(m.pad.x), ey / double(m.pad.y)));
+        INFO(s.name << " triangle " << k << ": uv (" << m.uv.x << ", " << m.uv.y << ") pad (" << m.pad.x << ", "
+                    << m.pad.y << "), exact off by (" << ex << ", " << ey << "), claim error " << e);
+        CHECK(ex <= double(m.pad.x));
+        CHECK(ey <= double(m.pad.y));
+        // Points whose error the pad would not cover without uv's rounding term.
+        roundingDecides += ex > double(m.pad.x) - OBLONG_U2M24 * std::abs(double(m.uv.x)) ||
+                           ey > double(m.pad.y) - OBLONG_U2M24 * std::abs(double(m.uv.y));
+      }
+    }
+    CHECK(accepted >= claims / 4);  // the deep sphere has no well-posed triangle: no claims
+    allAccepted += accepted;
+    UNSCOPED_INFO(s.name << ": " << accepted << " of " << claims << " claims accepted, largest error " << worst
+                         << " of the pad");
+  }
+  UNSCOPED_INFO(roundingDecides << " points need the rounding term");
+  CHECK(allAccepted > 5000);
+  CHECK(roundingDecides > 0);
+}
+
 TEST_CASE("the ray's curve is monotone between the turning points", "[traversal][psi][unit]") {
   const Newton inv;
   std::mt19937 rng(3);
@@ -450,7 +541,7 @@ TEST_CASE("the march's walk reaches every cell within eps of its piece", "[trave
   // Random monotone arcs of conics ψ = α·(w + γw² − c·(x − x0)²), w = y − y0 − s·(x − x0)
   // (x², xy, y² terms, a second branch at w ≈ −1/γ), anywhere up to 10^5 cells from the
   // origin, either axis major, either direction, with ε from 10^-3 to 2 cells and end
-  // pads from 10^-12 to a quarter cell (plus the snap's allowance, as makePoint's); every cell whose ε-dilated square holds a point of
+  // pads from 10^-12 to a quarter cell (plus the snap's allowance and uv's rounding to float, as makePoint's); every cell whose ε-dilated square holds a point of
   // the arc (2 000 points along it, in long double) must be among the walk's cells; a
   // quarter of the arcs are lines touching a dilated cell at a corner only.
   std::mt19937 rng(31);
@@ -517,11 +608,13 @@ TEST_CASE("the march's walk reaches every cell within eps of its piece", "[trave
       const auto [x, y] = point(dx);
       return swap ? dvec2(double(y), double(x)) : dvec2(double(x), double(y));
     };
-    // End pads as makePoint's: at least the snap's allowance (also above the rounding of
-    // the long double point to double).
+    // End points stored as makePoint stores them: uv rounded to float, the pad at least
+    // the snap's allowance (also above the rounding of the long double point to double)
+    // plus uv's rounding, rounded up.
     auto end = [&](double t, long double dx) {
       const dvec2 p = uv(dx);
-      return shared::CurvePoint{t, p, dvec2(pad) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(p))};
+      const dvec2 pd = dvec2(pad) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(p)) + OBLONG_U2M24 * glm::abs(p);
+      return shared::CurvePoint{t, vec2(p), vec2(shared::floatAbove(pd.x, pd.x), shared::floatAbove(pd.y, pd.y))};
     };
     const shared::CurvePoint pa = end(0.0, back ? a0 + len : a0), pb = end(1.0, back ? a0 : a0 + len);
     m.startMarch(pa, pb);

@@ -12,14 +12,18 @@
 #include "core/kernels/constants.h"
 #include "core/kernels/lang.h"
 #include "core/kernels/patch_math.h"
+#include "core/kernels/rect_bounds.h"
 
 OBLONG_KERNELS_BEGIN
 
-// A point of the curve: ray parameter, local sample coordinates and their error bound.
+// A point of the curve: ray parameter, local sample coordinates and their error bound
+// (24 bytes: a stack entry is two). t is double and exact (the point is made there); uv
+// is the point's coordinates rounded to float, and pad, rounded up, covers that rounding
+// with the claim's error.
 struct CurvePoint {
   double t;
-  dvec2 uv;
-  dvec2 pad;
+  vec2 uv;
+  vec2 pad;
 };
 
 // What the shell analysis (PrismParams) bounds, for the claims: the analysed domain of
@@ -37,8 +41,8 @@ OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, 
                              OBLONG_IN(dvec3) D, double t, OBLONG_IN(dvec2) b, double s,
                              OBLONG_OUT(CurvePoint) outp) {
   outp.t = t;
-  outp.uv = dvec2(0.0);
-  outp.pad = dvec2(0.0);
+  outp.uv = vec2(0.0f);
+  outp.pad = vec2(0.0f);
   double dom = K.domainB;
   if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1.0 + dom)) return false;
   if (!(s >= K.domainS0 && s <= K.domainS1)) return false;
@@ -50,10 +54,13 @@ OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, 
   if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
       !(K.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (K.domainS1 - K.domainS0) + OBLONG_TRAV_TINY))
     return false;
-  outp.uv = frameLocal(F, b);
-  OBLONG_PRECISE dvec2 pad = K.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + abs(outp.uv));
-  outp.pad = pad;
-  return finiteD(outp.uv.x) && finiteD(outp.uv.y);
+  dvec2 uv = frameLocal(F, b);
+  // uv rounded to the nearest float moves by at most 2^-24·|uv|; the pad rounded up.
+  OBLONG_PRECISE dvec2 pad = K.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + abs(uv)) +
+                             OBLONG_U2M24 * abs(uv);
+  outp.uv = vec2(uv);
+  for (int k = 0; k < 2; ++k) outp.pad[k] = floatAbove(pad[k], pad[k]);
+  return finiteF(outp.uv.x) && finiteF(outp.uv.y) && finiteF(outp.pad.x) && finiteF(outp.pad.y);
 }
 
 // The least-squares s of the point X on b's displacement line.
@@ -88,10 +95,13 @@ OBLONG_INLINE bool newtonClaim(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLO
 
 // The uv at t on the chord between curve points a and b (linear in t: exact where T's
 // normals are parallel), where a claim between them starts (newtonClaim).
-OBLONG_INLINE dvec2 chordUv(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, double t) {
-  OBLONG_PRECISE double tau = (t - a.t) / (b.t - a.t);
-  OBLONG_PRECISE dvec2 g = a.uv + tau * (b.uv - a.uv);
+OBLONG_INLINE dvec2 chordAt(double ta, OBLONG_IN(dvec2) ua, double tb, OBLONG_IN(dvec2) ub, double t) {
+  OBLONG_PRECISE double tau = (t - ta) / (tb - ta);
+  OBLONG_PRECISE dvec2 g = ua + tau * (ub - ua);
   return g;
+}
+OBLONG_INLINE dvec2 chordUv(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, double t) {
+  return chordAt(a.t, dvec2(a.uv), b.t, dvec2(b.uv), t);
 }
 
 OBLONG_KERNELS_END

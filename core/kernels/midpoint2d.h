@@ -20,7 +20,7 @@ OBLONG_INLINE bool midpointLine(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b
   int first = ext.x >= ext.y ? 0 : 1;
   axis = k == 0 ? first : 1 - first;
   OBLONG_PRECISE double m = 0.5 * (lo[axis] + hi[axis]);
-  if (!strictlyBetween(a, b, axis, m)) m = 0.5 * (a.uv[axis] + b.uv[axis]);
+  if (!strictlyBetween(a, b, axis, m)) m = 0.5 * (double(a.uv[axis]) + double(b.uv[axis]));
   c = m;
   return strictlyBetween(a, b, axis, m);
 }

@@ -77,13 +77,13 @@
 #define OBLONG_RP_PENDING_CROSSING (-5.0)  // claimed at known prism coordinates (uv: b, pad.y: s)
 #define OBLONG_RP_PENDING_HIT (-6.0)     // claimed from uv at the closest hit, whatever its pad
 // A stack entry that is a box: a.pad.x holds this, a.uv and b.uv its local cells' corners
-// (clo, chi: integers, exact in double), a.t and b.t its ray interval.
+// (clo, chi: integers within T's cells, exact in float), a.t and b.t its ray interval.
 #define OBLONG_RP_BOX_ENTRY (-4.0)
 
 OBLONG_KERNELS_BEGIN
 
 // A stack entry: a piece of the curve (a, b), or a box of local cells with its ray
-// interval in the same fields (OBLONG_RP_BOX_ENTRY): 80 bytes, the stack's whole state.
+// interval in the same fields (OBLONG_RP_BOX_ENTRY): 48 bytes, the stack's whole state.
 struct RpEntry {
   CurvePoint a, b;
 };
@@ -148,14 +148,21 @@ OBLONG_INLINE double texPiecePad(double boxPad, double maxO, double maxP, double
   return texFramePad(boxPad, mag);
 }
 
-// The rectangle of a piece: its padded endpoints' box.
-OBLONG_INLINE dvec2 pieceLo(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) { return min(a.uv - a.pad, b.uv - b.pad); }
-OBLONG_INLINE dvec2 pieceHi(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) { return max(a.uv + a.pad, b.uv + b.pad); }
+// The rectangle of a piece: its padded endpoints' box, in double (the sums' rounding,
+// at most 2^-53 of |uv|, is inside snapCells' allowance).
+OBLONG_INLINE dvec2 pieceLo(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  OBLONG_PRECISE dvec2 r = min(dvec2(a.uv) - dvec2(a.pad), dvec2(b.uv) - dvec2(b.pad));
+  return r;
+}
+OBLONG_INLINE dvec2 pieceHi(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  OBLONG_PRECISE dvec2 r = max(dvec2(a.uv) + dvec2(a.pad), dvec2(b.uv) + dvec2(b.pad));
+  return r;
+}
 
 // c strictly between the endpoints' coordinates on `axis`: the monotone curve crosses
 // {axis = c} exactly once.
 OBLONG_INLINE bool strictlyBetween(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, int axis, double c) {
-  double x0 = min(a.uv[axis], b.uv[axis]), x1 = max(a.uv[axis], b.uv[axis]);
+  double x0 = double(min(a.uv[axis], b.uv[axis])), x1 = double(max(a.uv[axis], b.uv[axis]));
   return c > x0 && c < x1;
 }
 

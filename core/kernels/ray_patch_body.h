@@ -92,8 +92,8 @@ bool pending(OBLONG_IN(CurvePoint) p) { return p.pad.x < 0.0; }
 CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
   CurvePoint p;
   p.t = t;
-  p.uv = g;
-  p.pad = dvec2(how, 0.0);
+  p.uv = vec2(g);
+  p.pad = vec2(float(how), 0.0f);
   return p;
 }
 
@@ -104,10 +104,10 @@ CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
 // chordUv; at the closest hit): s by least squares and one Newton step in double
 // (newtonClaim). Either way makePoint's residual bounds the point's error.
 bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(dvec2) b, OBLONG_OUT(double) s) {
-  b = p.uv;
-  s = p.pad.y;
+  b = dvec2(p.uv);
+  s = double(p.pad.y);
   if (!invert && (p.pad.x == OBLONG_RP_PENDING_CROSSING || p.pad.x == OBLONG_RP_PENDING_TURN)) return true;
-  if (!invert) return newtonClaim(g_F, g_O, g_D, p.t, frameBary(g_F, p.uv), b, s);
+  if (!invert) return newtonClaim(g_F, g_O, g_D, p.t, frameBary(g_F, dvec2(p.uv)), b, s);
   ++g_inversions;
   OBLONG_PRECISE dvec3 X = g_O + p.t * g_D;
   vec2 bary;
@@ -132,14 +132,14 @@ bool curvePointAt(OBLONG_IN(CurvePoint) p, OBLONG_OUT(CurvePoint) outp) {
                how == OBLONG_RP_PENDING_TURN;
   bool invert = how != OBLONG_RP_PENDING_HIT && how != OBLONG_RP_PENDING_CROSSING;
   outp.t = p.t;
-  outp.uv = dvec2(0.0);
-  outp.pad = dvec2(0.0);
+  outp.uv = vec2(0.0f);
+  outp.pad = vec2(0.0f);
   for (int at = claim ? 0 : 1; at < (invert ? 2 : 1); ++at) {
     dvec2 b;
     double s;
     if (coordsAt(p, at == 1, b, s) && makePoint(g_F, g_claim, g_O, g_D, p.t, b, s, outp) &&
         (at == 1 || (how != OBLONG_RP_PENDING_CLAIM && how != OBLONG_RP_PENDING_TURN) ||
-         outp.pad.x + outp.pad.y <= OBLONG_TRAV_CLAIM_PAD))
+         double(outp.pad.x) + double(outp.pad.y) <= OBLONG_TRAV_CLAIM_PAD))
       return true;
   }
   if (invert) OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_BAD_INVERSION);
@@ -172,7 +172,7 @@ bool crossingOn(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, do
     if (!rayParamAt(g_F, g_O, g_D, uv, t, s)) continue;
     if (!(t > pa.t && t < pb.t)) continue;
     outp = pendingPoint(t, frameBary(g_F, uv), OBLONG_RP_PENDING_CROSSING);
-    outp.pad.y = s;
+    outp.pad.y = float(s);
     ++found;
   }
   return found == 1;
@@ -212,11 +212,11 @@ void pushPiece(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
 }
 void pushBox(OBLONG_IN(ivec2) lo, OBLONG_IN(ivec2) hi, double ta, double tb) {
   g_st[g_sp].a.t = ta;
-  g_st[g_sp].a.uv = dvec2(lo);
-  g_st[g_sp].a.pad = dvec2(OBLONG_RP_BOX_ENTRY, 0.0);
+  g_st[g_sp].a.uv = vec2(lo);
+  g_st[g_sp].a.pad = vec2(float(OBLONG_RP_BOX_ENTRY), 0.0f);
   g_st[g_sp].b.t = tb;
-  g_st[g_sp].b.uv = dvec2(hi);
-  g_st[g_sp].b.pad = dvec2(0.0);
+  g_st[g_sp].b.uv = vec2(hi);
+  g_st[g_sp].b.pad = vec2(0.0f);
   ++g_sp;
 }
 bool isBox(OBLONG_IN(RpEntry) e) { return e.a.pad.x == OBLONG_RP_BOX_ENTRY; }
@@ -286,7 +286,7 @@ void startCells(OBLONG_IN(ivec2) clo, OBLONG_IN(ivec2) chi) {
 
 void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_LEAF);
-  OBLONG_PRECISE dvec2 d = b.uv - a.uv;
+  OBLONG_PRECISE dvec2 d = dvec2(b.uv) - dvec2(a.uv);
   int ax = abs(d.x) >= abs(d.y) ? 0 : 1, mi = 1 - ax;
   dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
   // Snapped to cells per axis, from one site (snapCells' rounding allowance, unclamped): the piece's
@@ -300,8 +300,8 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
     dil[k] = e;
     for (int q = 0; q < 3; ++q) {
       CurvePoint p = q == 1 ? a : b;
-      OBLONG_PRECISE double l = q == 0 ? lo[k] - g_eps[k] : p.uv[k] - p.pad[k] - dil[k];
-      OBLONG_PRECISE double h = q == 0 ? hi[k] + g_eps[k] : p.uv[k] + p.pad[k] + dil[k];
+      OBLONG_PRECISE double l = q == 0 ? lo[k] - g_eps[k] : double(p.uv[k]) - double(p.pad[k]) - dil[k];
+      OBLONG_PRECISE double h = q == 0 ? hi[k] + g_eps[k] : double(p.uv[k]) + double(p.pad[k]) + dil[k];
       OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(l) + abs(h));
       int c0 = int(clamp(floor(l - eta), -lim, lim)), c1 = int(clamp(floor(h + eta), -lim, lim));
       if (q == 0) {
@@ -332,7 +332,7 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   g_gHi = chi;
   g_mSa = d[ax] >= 0.0 ? 1 : -1;
   g_mSm = d[mi] >= 0.0 ? 1 : -1;
-  for (int k = 0; k < 2; ++k) g_mCertain[k] = abs(d[k]) > a.pad[k] + b.pad[k];
+  for (int k = 0; k < 2; ++k) g_mCertain[k] = abs(d[k]) > double(a.pad[k]) + double(b.pad[k]);
   g_mAll = !g_mCertain.x || !g_mCertain.y;
   // ψ re-centred at A (exact algebra; the double rounding is far inside g_mErr's margin)
   // and rounded to float; its error over the rectangle: OBLONG_TRAV_PSI_ERR of its terms'
@@ -375,9 +375,10 @@ double g_mStopT;
 void stopAt(OBLONG_IN(CurvePoint) m) {
   for (int k = 0; k < 2; ++k)
     if (g_mCertain[k]) {
-      OBLONG_PRECISE double margin = m.pad[k] + g_ma.pad[k] + g_mb.pad[k];
+      OBLONG_PRECISE double margin = double(m.pad[k]) + double(g_ma.pad[k]) + double(g_mb.pad[k]);
       int sg = k == g_mAx ? g_mSa : g_mSm;
-      g_mStop[k] = sg > 0 ? m.uv[k] + margin : m.uv[k] - margin;
+      OBLONG_PRECISE double stop = sg > 0 ? double(m.uv[k]) + margin : double(m.uv[k]) - margin;
+      g_mStop[k] = stop;
       g_mStopAxis[k] = true;
     }
 }
@@ -501,7 +502,7 @@ int nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
 // Pads that dominate the rectangle cannot be split away: such a piece is a leaf too.
 bool pieceSmall(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   dvec2 ext = pieceHi(a, b) - pieceLo(a, b);
-  dvec2 pads = a.pad + b.pad;
+  OBLONG_PRECISE dvec2 pads = dvec2(a.pad) + dvec2(b.pad);
   int la = ext.x >= ext.y ? 0 : 1;
   return ext[la] <= g_leafScale || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
 }
@@ -851,17 +852,16 @@ int setupCurve() {
     CurvePoint p;
     if (t == c.t) {
       p = pendingPoint(t, c.bary, OBLONG_RP_PENDING_CROSSING);
-      p.pad.y = c.s;
+      p.pad.y = float(c.s);
     } else {  // the chord between the crossings' uv (a claim's uv is frameLocal of its b)
-      CurvePoint e0 = pendingPoint(first.t, frameLocal(g_F, first.bary), 0.0);
-      CurvePoint e1 = pendingPoint(last.t, frameLocal(g_F, last.bary), 0.0);
-      p = pendingPoint(t, chordUv(e0, e1, t), OBLONG_RP_PENDING_CLAIM);
+      dvec2 g = chordAt(first.t, frameLocal(g_F, first.bary), last.t, frameLocal(g_F, last.bary), t);
+      p = pendingPoint(t, g, OBLONG_RP_PENDING_CLAIM);
     }
     pts[k == 0 ? 0 : ns + 1] = p;
   }
   for (int k = 0; k < ns; ++k) {
     pts[k + 1] = pendingPoint(ts[k], bs[k], OBLONG_RP_PENDING_TURN);
-    pts[k + 1].pad.y = ss[k];
+    pts[k + 1].pad.y = float(ss[k]);
   }
   g_sp = 0;
   for (int k = ns; k >= 0; --k) pushPiece(pts[k], pts[k + 1]);
