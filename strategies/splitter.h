@@ -52,8 +52,8 @@ struct CurvePoint : shared::CurvePoint {
 struct CurvePiece {
   CurvePoint a, b;
   // Bounding rectangle (padded endpoints), in double.
-  dvec2 lo() const { return shared::pieceLo(a, b); }
-  dvec2 hi() const { return shared::pieceHi(a, b); }
+  dvec2 lo() const { return dvec2(shared::pieceLo(a, b)); }
+  dvec2 hi() const { return dvec2(shared::pieceHi(a, b)); }
 };
 
 // What a splitter may ask about the current ray and triangle.

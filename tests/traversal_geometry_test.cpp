@@ -244,11 +244,15 @@ TEST_CASE("a made curve point's stored uv and pad hold the ray point's exact pro
         worst = std::max(worst, std::max(ex / double(m.pad.x), ey / double(m.pad.y)));
         INFO(s.name << " triangle " << k << ": uv (" << m.uv.x << ", " << m.uv.y << ") pad (" << m.pad.x << ", "
                     << m.pad.y << "), exact off by (" << ex << ", " << ey << "), claim error " << e);
+        // Within the pad, and within the float rectangle the pieces take from it.
         CHECK(ex <= double(m.pad.x));
         CHECK(ey <= double(m.pad.y));
-        // Points whose error the pad would not cover without uv's rounding term.
-        roundingDecides += ex > double(m.pad.x) - OBLONG_U2M24 * std::abs(double(m.uv.x)) ||
-                           ey > double(m.pad.y) - OBLONG_U2M24 * std::abs(double(m.uv.y));
+        const vec2 lo = shared::pieceLo(m, m), hi = shared::pieceHi(m, m);
+        CHECK((LD(lo.x) <= exactX && exactX <= LD(hi.x)));
+        CHECK((LD(lo.y) <= exactY && exactY <= LD(hi.y)));
+        // Points whose error the pad would not cover without uv's rounding terms.
+        roundingDecides += ex > double(m.pad.x) - OBLONG_U2M23 * std::abs(double(m.uv.x)) ||
+                           ey > double(m.pad.y) - OBLONG_U2M23 * std::abs(double(m.uv.y));
       }
     }
     CHECK(accepted >= claims / 4);  // the deep sphere has no well-posed triangle: no claims
@@ -613,7 +617,7 @@ TEST_CASE("the march's walk reaches every cell within eps of its piece", "[trave
     // plus uv's rounding, rounded up.
     auto end = [&](double t, long double dx) {
       const dvec2 p = uv(dx);
-      const dvec2 pd = dvec2(pad) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(p)) + OBLONG_U2M24 * glm::abs(p);
+      const dvec2 pd = dvec2(pad) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(p)) + OBLONG_U2M23 * glm::abs(p);
       return shared::CurvePoint{t, vec2(p), vec2(shared::floatAbove(pd.x, pd.x), shared::floatAbove(pd.y, pd.y))};
     };
     const shared::CurvePoint pa = end(0.0, back ? a0 + len : a0), pb = end(1.0, back ? a0 : a0 + len);

@@ -55,9 +55,11 @@ OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, 
       !(K.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (K.domainS1 - K.domainS0) + OBLONG_TRAV_TINY))
     return false;
   dvec2 uv = frameLocal(F, b);
-  // uv rounded to the nearest float moves by at most 2^-24·|uv|; the pad rounded up.
+  // uv rounded to the nearest float moves by at most u·|uv| (u = 2^-24), and the float
+  // rectangle's uv ± pad (pieceLo, pieceHi) rounds by at most u·(|uv| + pad) more: 2u·|uv|
+  // added, and the pad rounded up by more than its own u.
   OBLONG_PRECISE dvec2 pad = K.kxy * (r * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + abs(uv)) +
-                             OBLONG_U2M24 * abs(uv);
+                             OBLONG_U2M23 * abs(uv);
   outp.uv = vec2(uv);
   for (int k = 0; k < 2; ++k) outp.pad[k] = floatAbove(pad[k], pad[k]);
   return finiteF(outp.uv.x) && finiteF(outp.uv.y) && finiteF(outp.pad.x) && finiteF(outp.pad.y);

@@ -15,7 +15,7 @@ OBLONG_KERNELS_BEGIN
 // when c is not strictly between the endpoints (the curve need not cross the line).
 OBLONG_INLINE bool midpointLine(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, int k, OBLONG_OUT(int) axis,
                                 OBLONG_OUT(double) c) {
-  dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
+  dvec2 lo = dvec2(pieceLo(a, b)), hi = dvec2(pieceHi(a, b));
   OBLONG_PRECISE dvec2 ext = hi - lo;
   int first = ext.x >= ext.y ? 0 : 1;
   axis = k == 0 ? first : 1 - first;

@@ -148,14 +148,14 @@ OBLONG_INLINE double texPiecePad(double boxPad, double maxO, double maxP, double
   return texFramePad(boxPad, mag);
 }
 
-// The rectangle of a piece: its padded endpoints' box, in double (the sums' rounding,
-// at most 2^-53 of |uv|, is inside snapCells' allowance).
-OBLONG_INLINE dvec2 pieceLo(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
-  OBLONG_PRECISE dvec2 r = min(dvec2(a.uv) - dvec2(a.pad), dvec2(b.uv) - dvec2(b.pad));
+// The rectangle of a piece: its padded endpoints' box, in float (a made point's pad
+// covers the rounding of uv ± pad too: makePoint).
+OBLONG_INLINE vec2 pieceLo(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  OBLONG_PRECISE vec2 r = min(a.uv - a.pad, b.uv - b.pad);
   return r;
 }
-OBLONG_INLINE dvec2 pieceHi(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
-  OBLONG_PRECISE dvec2 r = max(dvec2(a.uv) + dvec2(a.pad), dvec2(b.uv) + dvec2(b.pad));
+OBLONG_INLINE vec2 pieceHi(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
+  OBLONG_PRECISE vec2 r = max(a.uv + a.pad, b.uv + b.pad);
   return r;
 }
 

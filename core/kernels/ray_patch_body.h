@@ -37,6 +37,7 @@ double g_boxPad, g_tAbs;  // the ray's pad of the per-step boxes; slack for floa
 double g_texPad;          // g_boxPad in the texture frame
 float g_texPadF;          // g_texPad rounded up: the float boxes' pad
 dvec2 g_eps;              // ε: cells within it of the curve are marched
+vec2 g_epsF;              // ε rounded up (the pieces' float rectangles)
 bool g_wideEps;           // ε wide against the marching scale: leaves are boxes
 double g_leafScale;       // pieces up to this many texels are leaves
 Psi g_psi;                // the ray's implicit curve in texture space (Eq. 3)
@@ -59,6 +60,7 @@ void rpInit(OBLONG_IN(RayMargin) m, double maxP, double maxO, double a, double b
   g_texPadF = floatAbove(g_texPad, g_texPad);
   OBLONG_PRECISE dvec2 e = eps + kxy * (double(OBLONG_TRAV_RAY_ERR_FACTOR) * m.rayErr);
   g_eps = e;
+  g_epsF = vec2(floatAbove(e.x, e.x), floatAbove(e.y, e.y));
   double maxDil = max(g_eps.x, g_eps.y);
   g_wideEps = maxDil > OBLONG_TRAV_WIDE_EPS_REL * double(g_marchingScale);
   g_leafScale = g_wideEps ? max(double(g_marchingScale), OBLONG_TRAV_WIDE_LEAF_EPS * maxDil) : double(g_marchingScale);
@@ -163,7 +165,7 @@ bool crossingOn(OBLONG_IN(CurvePoint) pa, OBLONG_IN(CurvePoint) pb, int axis, do
   int n = quadraticRoots(q2, q1, q0, w, rp);
   if (n <= 0) return false;
   int mi = 1 - axis;
-  dvec2 lo = pieceLo(pa, pb), hi = pieceHi(pa, pb);
+  dvec2 lo = dvec2(pieceLo(pa, pb)), hi = dvec2(pieceHi(pa, pb));
   int found = 0;
   for (int k = 0; k < n; ++k) {
     if (w[k] < lo[mi] - rp[k] || w[k] > hi[mi] + rp[k]) continue;
@@ -221,13 +223,17 @@ void pushBox(OBLONG_IN(ivec2) lo, OBLONG_IN(ivec2) hi, double ta, double tb) {
 }
 bool isBox(OBLONG_IN(RpEntry) e) { return e.a.pad.x == OBLONG_RP_BOX_ENTRY; }
 
-// Local cells touching [lo, hi], clipped to T's cells. False when empty.
-bool snapCells(OBLONG_IN(dvec2) lo, OBLONG_IN(dvec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
-  double lim = OBLONG_TRAV_SNAP_LIMIT;
+// Local cells touching [lo, hi] (a float rectangle dilated by ε in float: lo − ε and
+// hi + ε are off by at most 2^-24 of their magnitude, and lo − η by as much again, so the
+// allowance η = 2^-22·(1 + |lo| + |hi|) keeps every cell), clipped to T's cells. False
+// when empty.
+bool snapCells(OBLONG_IN(vec2) lo, OBLONG_IN(vec2) hi, OBLONG_OUT(ivec2) clo, OBLONG_OUT(ivec2) chi) {
+  float lim = float(OBLONG_TRAV_SNAP_LIMIT);
   for (int k = 0; k < 2; ++k) {
-    OBLONG_PRECISE double eta = OBLONG_TRAV_SNAP_ETA * (1.0 + abs(lo[k]) + abs(hi[k]));
-    clo[k] = int(clamp(floor(lo[k] - eta), -lim, lim));
-    chi[k] = int(clamp(floor(hi[k] + eta), -lim, lim));
+    OBLONG_PRECISE float eta = float(OBLONG_U2M22) * (1.0f + abs(lo[k]) + abs(hi[k]));
+    OBLONG_PRECISE float l = lo[k] - eta, h = hi[k] + eta;
+    clo[k] = int(clamp(floor(l), -lim, lim));
+    chi[k] = int(clamp(floor(h), -lim, lim));
   }
   clo = max(clo, g_cellLo);
   chi = min(chi, g_cellHi);
@@ -288,7 +294,7 @@ void startMarch(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_LEAF);
   OBLONG_PRECISE dvec2 d = dvec2(b.uv) - dvec2(a.uv);
   int ax = abs(d.x) >= abs(d.y) ? 0 : 1, mi = 1 - ax;
-  dvec2 lo = pieceLo(a, b), hi = pieceHi(a, b);
+  dvec2 lo = dvec2(pieceLo(a, b)), hi = dvec2(pieceHi(a, b));
   // Snapped to cells per axis, from one site (snapCells' rounding allowance, unclamped): the piece's
   // rectangle dilated by ε (q = 0: g_mRLo..g_mRHi), the start and the end block (q = 1, 2:
   // an end's pad box dilated by dil, ε and the allowance over the rectangle).
@@ -501,10 +507,10 @@ int nextCell(OBLONG_OUT(int) ci, OBLONG_OUT(int) cj) {
 // ---- pieces and boxes ----------------------------------------------------------------------
 // Pads that dominate the rectangle cannot be split away: such a piece is a leaf too.
 bool pieceSmall(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
-  dvec2 ext = pieceHi(a, b) - pieceLo(a, b);
-  OBLONG_PRECISE dvec2 pads = dvec2(a.pad) + dvec2(b.pad);
+  OBLONG_PRECISE vec2 ext = pieceHi(a, b) - pieceLo(a, b);
+  OBLONG_PRECISE vec2 pads = a.pad + b.pad;
   int la = ext.x >= ext.y ? 0 : 1;
-  return ext[la] <= g_leafScale || pads[la] > OBLONG_TRAV_PAD_DOMINANCE * ext[la];
+  return double(ext[la]) <= g_leafScale || pads[la] > float(OBLONG_TRAV_PAD_DOMINANCE) * ext[la];
 }
 
 // A piece too small to split is marched (pieceEnd), unless ε (float rounding at a
@@ -514,7 +520,7 @@ bool pieceSmall(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
 void wideLeaf(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b) {
   OBLONG_HOOK(rpStat)(OBLONG_RP_STAT_WIDE_LEAF);
   ivec2 clo, chi;
-  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return;
+  if (!snapCells(pieceLo(a, b) - g_epsF, pieceHi(a, b) + g_epsF, clo, chi)) return;
   pushBox(clo, chi, a.t, min(b.t, bestLimit()));
 }
 
@@ -533,7 +539,7 @@ int pieceBegin(OBLONG_IN(CurvePoint) a, OBLONG_IN(CurvePoint) b, OBLONG_OUT(ivec
   // back on the stack: that loop is the one call site of the claim and of the inverter.
   if (pending(a) || pending(b)) return 2;
   if (pieceSmall(a, b)) leaf = 1;
-  if (!snapCells(pieceLo(a, b) - g_eps, pieceHi(a, b) + g_eps, clo, chi)) return 0;
+  if (!snapCells(pieceLo(a, b) - g_epsF, pieceHi(a, b) + g_epsF, clo, chi)) return 0;
   // A marched leaf of two cells or more is box-tested first: a missed box skips it.
   if (leaf == 0 || (!g_wideEps && (clo.x != chi.x || clo.y != chi.y))) {
     t1 = min(b.t, bestLimit());
@@ -554,9 +560,9 @@ void pieceEnd(CurvePoint a, CurvePoint b, ivec2 clo, ivec2 chi, double t0, doubl
   if (!pend && !stop && leaf == 0) {
     // The clipped ends are worth a new point (Fig. 5a: their projections can give a much
     // smaller rectangle) when they gain this much.
-    OBLONG_PRECISE dvec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
+    OBLONG_PRECISE vec2 gainExt = pieceHi(a, b) - pieceLo(a, b);
     OBLONG_PRECISE double gainDt = b.t - a.t;
-    minGain = max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / max(gainExt.x, gainExt.y));
+    minGain = max(OBLONG_TRAV_MIN_GAIN * gainDt, OBLONG_TRAV_MIN_GAIN_CELLS * gainDt / double(max(gainExt.x, gainExt.y)));
   }
   // Up to three points at one call site: the pending ends (e = -2, -1), or the clipped
   // ends (inversion during traversal) and then the split's point when the splitter asks

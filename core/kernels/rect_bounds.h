@@ -69,7 +69,7 @@ OBLONG_INLINE void clipBox(OBLONG_IN(dvec3) lo, OBLONG_IN(dvec3) hi, OBLONG_IN(d
 #define OBLONG_U2M20 9.5367431640625e-7   // 2^-20
 #define OBLONG_U2M21 4.76837158203125e-7  // 2^-21
 #define OBLONG_U2M22 2.384185791015625e-7 // 2^-22
-#define OBLONG_U2M24 5.9604644775390625e-8 // 2^-24
+#define OBLONG_U2M23 1.1920928955078125e-7 // 2^-23
 #define OBLONG_U2M50 8.8817841970012523e-16 // 2^-50
 
 // T's float box frame: its P and N in the texture frame, relative to the anchor (P at
