@@ -172,11 +172,13 @@ TEST_CASE("prisms contain the micro-geometry and the shell analysis bounds bulge
 
 TEST_CASE("a made curve point's stored uv and pad hold the ray point's exact projection",
           "[traversal][claims][unit]") {
-  // makePoint stores a point's uv in float with a pad (float, rounded up) that must cover
-  // both the claim's error (from its residual) and uv's rounding. Claims (b, s) off the
-  // exact projection by 10^-12 to 10^-3 on every suite's triangles and the stiff ones;
-  // the ray point X = O + t·D exact in long double, its projection (b*, s*) on T's frame
-  // by Newton in long double; every accepted point's |uv* − uv| must be within its pad.
+  // makePoint bounds a float claim's residual in float (from the ray's anchor in T's
+  // frame, claimResidual) and stores the point's uv in float with a pad (float, rounded
+  // up) that must cover both the claim's error and uv's rounding. Claims (b, s) off the
+  // exact projection by 10^-12 to 10^-3 on every suite's triangles and the stiff ones,
+  // from rays of any length (the anchor up to half the ray's length from the point); the
+  // ray point X = O + t·D exact in long double, its projection (b*, s*) on T's frame by
+  // Newton in long double; every accepted point's |uv* − uv| must be within its pad.
   std::vector<Scenario> cases = scenarios();
   for (const Scenario& s : stiffScenarios()) cases.push_back(s);
   std::mt19937 rng(41);
@@ -234,11 +236,12 @@ TEST_CASE("a made curve point's stored uv and pad hold the ray point's exact pro
         const LD exactY = LD(F.sc.y) + LD(F.sU.y) * bu + LD(F.sV.y) * bv;
         // A claim off by up to 10^-3 in b and s (relative to the prism's height).
         const double e = logU(1e-12, 1e-3);
-        const dvec2 b(double(bu) + e * (2.0 * U(rng) - 1.0), double(bv) + e * (2.0 * U(rng) - 1.0));
-        const double sc = double(bs) + e * (2.0 * U(rng) - 1.0) * (P.b - P.a + 1e-3);
+        const vec2 b(float(double(bu) + e * (2.0 * U(rng) - 1.0)), float(double(bv) + e * (2.0 * U(rng) - 1.0)));
+        const float sc = float(double(bs) + e * (2.0 * U(rng) - 1.0) * (P.b - P.a + 1e-3));
+        const shared::ClaimAnchor A = shared::claimAnchor(F, O, D, t * (1.0 - 0.5 * U(rng) * U(rng)));
         shared::CurvePoint m;
         ++claims;
-        if (!shared::makePoint(F, K, O, D, t, b, sc, m)) continue;
+        if (!shared::makePoint(F, K, A, t, b, sc, m)) continue;
         ++accepted;
         const double ex = double(std::abs(exactX - LD(m.uv.x))), ey = double(std::abs(exactY - LD(m.uv.y)));
         worst = std::max(worst, std::max(ex / double(m.pad.x), ey / double(m.pad.y)));
@@ -250,9 +253,15 @@ TEST_CASE("a made curve point's stored uv and pad hold the ray point's exact pro
         const vec2 lo = shared::pieceLo(m, m), hi = shared::pieceHi(m, m);
         CHECK((LD(lo.x) <= exactX && exactX <= LD(hi.x)));
         CHECK((LD(lo.y) <= exactY && exactY <= LD(hi.y)));
-        // Points whose error the pad would not cover without uv's rounding terms.
-        roundingDecides += ex > double(m.pad.x) - OBLONG_U2M23 * std::abs(double(m.uv.x)) ||
-                           ey > double(m.pad.y) - OBLONG_U2M23 * std::abs(double(m.uv.y));
+        // Points whose error a pad from the computed residual alone (no term for the float
+        // evaluation's error, nor for uv's rounding) would not cover.
+        const shared::FrameF R = shared::frameF(F);
+        const float dt = float(t - A.tA);
+        const vec3 Xf = A.XA + dt * A.Df, Nf = R.n0 + R.f1 * b.x + R.f2 * b.y;
+        const vec3 d = R.e1 * b.x + R.e2 * b.y + sc * Nf - Xf;
+        const double rf = double(std::sqrt(glm::dot(d, d)));
+        const dvec2 bare = P.kxy * (rf * OBLONG_TRAV_RESIDUAL_SAFETY) + OBLONG_TRAV_SNAP_ETA * (1.0 + glm::abs(dvec2(m.uv)));
+        roundingDecides += ex > bare.x || ey > bare.y;
       }
     }
     CHECK(accepted >= claims / 4);  // the deep sphere has no well-posed triangle: no claims
@@ -260,7 +269,7 @@ TEST_CASE("a made curve point's stored uv and pad hold the ray point's exact pro
     UNSCOPED_INFO(s.name << ": " << accepted << " of " << claims << " claims accepted, largest error " << worst
                          << " of the pad");
   }
-  UNSCOPED_INFO(roundingDecides << " points need the rounding term");
+  UNSCOPED_INFO(roundingDecides << " points need the rounding terms");
   CHECK(allAccepted > 5000);
   CHECK(roundingDecides > 0);
 }

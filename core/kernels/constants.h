@@ -66,10 +66,6 @@
 // (max |o| + 1).
 #define OBLONG_TRAV_OBB_ROUND 1e-12
 
-// makePoint: the residual |G(b, s) − X(t)| is computed in double; this relative term
-// (· the largest coordinate of X and G) covers its own rounding.
-#define OBLONG_TRAV_RESIDUAL_ROUND 1e-14
-
 // makePoint: safety factor on the residual bound (the error bounds kb, ks, kxy are
 // first-order; 0.1 % more covers the second-order term while the point is accepted).
 #define OBLONG_TRAV_RESIDUAL_SAFETY 1.001
@@ -82,11 +78,12 @@
 // makePoint: keeps the s test meaningful for an empty s domain (0.01 · 0 + this).
 #define OBLONG_TRAV_TINY 1e-300
 
-// Relative rounding allowance in sample units: the curve point's uv pad (this · (1 + |uv|))
-// and the snapping of rectangles and marched rows to cells (this · (1 + |lo| + |hi|)).
+// Relative rounding allowance in sample units for what is computed in double: the curve
+// point's uv pad (this · (1 + |uv|)) and the march's snapping of its rectangle and blocks
+// to cells (startMarch: this · (1 + |lo| + |hi|)). snapCells, in float, allows 2^-22.
 #define OBLONG_TRAV_SNAP_ETA 1e-9
 
-// Cell indices are clamped to ±this before the conversion to int (snapCells).
+// Cell indices are clamped to ±this before the conversion to int (snapCells, startMarch).
 #define OBLONG_TRAV_SNAP_LIMIT 1e9
 
 // The march's interval test (mayCross): ψ may vanish where |ψ| is within its variation

@@ -6,6 +6,8 @@
 // the ray point X(t). The residual r = G(b, s) − X(t) bounds the error: G is bilinear in
 // (b, s), so J(b, s_true)·(Δb, Δs) = −r exactly and |Δu| ≤ kb.x |r|, |Δv| ≤ kb.y |r|
 // while both points stay in the analysed domain (traversal/prism.h, the shell analysis).
+// Claims and their residuals are float, in T's frame from a per-ray anchor; what is
+// exact is the double frame and ray.
 #ifndef OBLONG_KERNELS_CURVE_POINT_H
 #define OBLONG_KERNELS_CURVE_POINT_H
 
@@ -35,26 +37,86 @@ struct ClaimBounds {
   dvec2 kxy;  // |ΔX|, |ΔY| (local sample coordinates) per unit residual
 };
 
+// The ray near T in T's frame, for the claims in float: X(t) − p0 = XA + (t − tA)·D, with
+// XA = X(tA) − p0 computed in double and rounded to float once per ray and triangle (tA:
+// where the ray enters the prism), so that the float terms are of T's size wherever the
+// ray comes from. XAerr bounds each component of XA's distance from the exact
+// O + tA·D − p0 (the double arithmetic's 2^-50 of its terms, the rounding's 2^-24).
+struct ClaimAnchor {
+  double tA;
+  vec3 XA, Df;  // Df: D rounded to float
+  float XAerr;
+};
+OBLONG_INLINE double maxAbs3(OBLONG_IN(dvec3) v) { return max(max(abs(v.x), abs(v.y)), abs(v.z)); }
+OBLONG_INLINE ClaimAnchor claimAnchor(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, double tA) {
+  ClaimAnchor A;
+  A.tA = tA;
+  OBLONG_PRECISE dvec3 X = (O + tA * D) - F.p0;
+  A.XA = vec3(X);
+  A.Df = vec3(D);
+  OBLONG_PRECISE double terms = maxAbs3(O) + abs(tA) * maxAbs3(D) + maxAbs3(F.p0);
+  OBLONG_PRECISE double err = 0.5 * OBLONG_U2M23 * maxAbs3(X) + OBLONG_U2M50 * terms;
+  A.XAerr = floatAbove(err, err);
+  return A;
+}
+
+// T's frame in float (PatchFrame's P and N over barycentrics, relative to p0).
+struct FrameF {
+  vec3 e1, e2, n0, f1, f2;
+};
+OBLONG_INLINE FrameF frameF(OBLONG_IN(PatchFrame) F) {
+  FrameF R;
+  R.e1 = vec3(F.e1);
+  R.e2 = vec3(F.e2);
+  R.n0 = vec3(F.n0);
+  R.f1 = vec3(F.f1);
+  R.f2 = vec3(F.f2);
+  return R;
+}
+
+// A bound on the residual |G(b, s) − X(t)| of the claim (b, s) at t (G, X exact in the
+// double frame and ray), evaluated in float in T's frame: the computed |G − X| (its dot
+// product and root within 2^-20, a GPU's sqrt included) plus the evaluation's error. Per
+// component, with u = 2^-24 and the frame's constants rounded to float: G = e1·u + e2·v +
+// s·(n0 + f1·u + f2·v) is off by at most 6u of MG = |e1·u| + |e2·v| + |s|·(|n0| + |f1·u| +
+// |f2·v|); X = XA + dt·Df (dt = t − tA rounded) by 5u of MX = |XA| + |dt·Df| plus XAerr; the
+// difference by u of both: 7u·MG + 5u·MX + XAerr, and the Euclidean norm of the errors is
+// at most their sum over the three components. 10u covers that with the magnitudes' own
+// rounding; the bound itself is rounded up by 2^-20.
+OBLONG_INLINE float claimResidual(OBLONG_IN(FrameF) R, OBLONG_IN(ClaimAnchor) A, double t, OBLONG_IN(vec2) b,
+                                  float s) {
+  float dt = float(t - A.tA);
+  OBLONG_PRECISE vec3 dX = dt * A.Df;
+  OBLONG_PRECISE vec3 X = A.XA + dX;
+  OBLONG_PRECISE vec3 fu = R.f1 * b.x, fv = R.f2 * b.y, eu = R.e1 * b.x, ev = R.e2 * b.y;
+  OBLONG_PRECISE vec3 N = R.n0 + fu + fv;
+  OBLONG_PRECISE vec3 G = eu + ev + s * N;
+  OBLONG_PRECISE vec3 d = G - X;
+  OBLONG_PRECISE float rf = sqrt(dotF(d, d));
+  OBLONG_PRECISE vec3 M = abs(eu) + abs(ev) + abs(s) * (abs(R.n0) + abs(fu) + abs(fv)) + abs(A.XA) + abs(dX);
+  OBLONG_PRECISE float r = (rf * (1.0f + float(OBLONG_U2M20)) + 10.0f * float(0.5 * OBLONG_U2M23) * (M.x + M.y + M.z) +
+                            3.0f * A.XAerr) *
+                           (1.0f + float(OBLONG_U2M20));
+  return r;
+}
+
 // The curve point for the claim (b, s) at t; false when the claim lies outside the
 // analysed domain or its error bound is too large to trust the first-order bounds.
-OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, OBLONG_IN(dvec3) O,
-                             OBLONG_IN(dvec3) D, double t, OBLONG_IN(dvec2) b, double s,
-                             OBLONG_OUT(CurvePoint) outp) {
+OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, OBLONG_IN(ClaimAnchor) A, double t,
+                             OBLONG_IN(vec2) b, float s, OBLONG_OUT(CurvePoint) outp) {
   outp.t = t;
   outp.uv = vec2(0.0f);
   outp.pad = vec2(0.0f);
-  double dom = K.domainB;
-  if (!(b.x >= -dom && b.y >= -dom && b.x + b.y <= 1.0 + dom)) return false;
-  if (!(s >= K.domainS0 && s <= K.domainS1)) return false;
-  OBLONG_PRECISE dvec3 X = O + t * D;
-  OBLONG_PRECISE dvec3 G = frameP(F, b) + s * frameN(F, b);
-  double mag = max(max(max(abs(X.x), abs(X.y)), max(abs(X.z), abs(G.x))), max(abs(G.y), abs(G.z)));
-  OBLONG_PRECISE double r = lengthD(G - X) + OBLONG_TRAV_RESIDUAL_ROUND * mag;
+  dvec2 bd = dvec2(b);
+  double sd = double(s), dom = K.domainB;
+  if (!(bd.x >= -dom && bd.y >= -dom && bd.x + bd.y <= 1.0 + dom)) return false;
+  if (!(sd >= K.domainS0 && sd <= K.domainS1)) return false;
+  double r = double(claimResidual(frameF(F), A, t, b, s));
   OBLONG_PRECISE dvec2 db = K.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
   if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
       !(K.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (K.domainS1 - K.domainS0) + OBLONG_TRAV_TINY))
     return false;
-  dvec2 uv = frameLocal(F, b);
+  dvec2 uv = frameLocal(F, bd);
   // uv rounded to the nearest float moves by at most u·|uv| (u = 2^-24), and the float
   // rectangle's uv ± pad (pieceLo, pieceHi) rounds by at most u·(|uv| + pad) more: 2u·|uv|
   // added, and the pad rounded up by more than its own u.
@@ -65,34 +127,30 @@ OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, 
   return finiteF(outp.uv.x) && finiteF(outp.uv.y) && finiteF(outp.pad.x) && finiteF(outp.pad.y);
 }
 
-// The least-squares s of the point X on b's displacement line.
-OBLONG_INLINE double heightOnLine(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) X, OBLONG_IN(dvec2) b) {
-  dvec3 N = frameN(F, b);
-  OBLONG_PRECISE double s = dotD(X - frameP(F, b), N) / dotD(N, N);
-  return s;
-}
-
-// One Newton step on G(b, s) = X(t) in double from barycentrics bc, with s its least
-// squares height on bc's displacement line (J = [∂G/∂u, ∂G/∂v, N], G bilinear in (b, s),
-// Cramer's rule): the claim (nb, ns). False when J is singular; makePoint bounds the
-// claim's error whatever it is.
-OBLONG_INLINE bool newtonClaim(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, double t,
-                               OBLONG_IN(dvec2) bc, OBLONG_OUT(dvec2) nb, OBLONG_OUT(double) ns) {
-  nb = dvec2(0.0);
-  ns = 0.0;
-  OBLONG_PRECISE dvec3 X = O + t * D;
-  dvec3 N = frameN(F, bc);
-  double s = heightOnLine(F, X, bc);
-  OBLONG_PRECISE dvec3 r = X - (frameP(F, bc) + s * N);
-  OBLONG_PRECISE dvec3 Gu = F.e1 + s * F.f1, Gv = F.e2 + s * F.f2;
-  dvec3 c0 = crossD(Gv, N), c1 = crossD(N, Gu), c2 = crossD(Gu, Gv);
-  double det = dotD(Gu, c0);
-  if (!(abs(det) > 0.0)) return false;
-  OBLONG_PRECISE dvec2 b1 = bc + dvec2(dotD(r, c0), dotD(r, c1)) / det;
-  OBLONG_PRECISE double s1 = s + dotD(r, c2) / det;
+// One Newton step on G(b, s) = X(t) in float in T's frame from barycentrics bc, with s
+// its least-squares height on bc's displacement line (J = [∂G/∂u, ∂G/∂v, N], G bilinear
+// in (b, s), Cramer's rule): the claim (nb, ns). False when J is singular. Its quotients
+// need not be correctly rounded (a GPU's `/`): makePoint bounds the claim's error
+// whatever it is.
+OBLONG_INLINE bool newtonClaim(OBLONG_IN(FrameF) R, OBLONG_IN(ClaimAnchor) A, double t, OBLONG_IN(vec2) bc,
+                               OBLONG_OUT(vec2) nb, OBLONG_OUT(float) ns) {
+  nb = vec2(0.0f);
+  ns = 0.0f;
+  float dt = float(t - A.tA);
+  OBLONG_PRECISE vec3 X = A.XA + dt * A.Df;
+  OBLONG_PRECISE vec3 N = R.n0 + R.f1 * bc.x + R.f2 * bc.y;
+  OBLONG_PRECISE vec3 P = R.e1 * bc.x + R.e2 * bc.y;
+  OBLONG_PRECISE float s = dotF(X - P, N) / dotF(N, N);
+  OBLONG_PRECISE vec3 r = X - (P + s * N);
+  OBLONG_PRECISE vec3 Gu = R.e1 + s * R.f1, Gv = R.e2 + s * R.f2;
+  vec3 c0 = crossF(Gv, N), c1 = crossF(N, Gu), c2 = crossF(Gu, Gv);
+  float det = dotF(Gu, c0);
+  if (!(abs(det) > 0.0f)) return false;
+  OBLONG_PRECISE vec2 b1 = bc + vec2(dotF(r, c0), dotF(r, c1)) / det;
+  OBLONG_PRECISE float s1 = s + dotF(r, c2) / det;
   nb = b1;
   ns = s1;
-  return true;
+  return finiteF(b1.x) && finiteF(b1.y) && finiteF(s1);
 }
 
 // The uv at t on the chord between curve points a and b (linear in t: exact where T's

@@ -41,6 +41,7 @@ vec2 g_epsF;              // ε rounded up (the pieces' float rectangles)
 bool g_wideEps;           // ε wide against the marching scale: leaves are boxes
 double g_leafScale;       // pieces up to this many texels are leaves
 Psi g_psi;                // the ray's implicit curve in texture space (Eq. 3)
+ClaimAnchor g_anchor;     // the ray in T's frame for the float claims (setupCurve)
 dvec2 g_dvd;              // approximate curve direction (front-to-back order)
 // The work done (RayCounters).
 int g_boxes, g_rangeQueries, g_inversions, g_cells, g_microTris;
@@ -65,6 +66,10 @@ void rpInit(OBLONG_IN(RayMargin) m, double maxP, double maxO, double a, double b
   g_wideEps = maxDil > OBLONG_TRAV_WIDE_EPS_REL * double(g_marchingScale);
   g_leafScale = g_wideEps ? max(double(g_marchingScale), OBLONG_TRAV_WIDE_LEAF_EPS * maxDil) : double(g_marchingScale);
   g_dvd = dvec2(1.0);
+  g_anchor.tA = 0.0;  // set by setupCurve; until then every claim is refused
+  g_anchor.XA = vec3(0.0f);
+  g_anchor.Df = vec3(0.0f);
+  g_anchor.XAerr = kInfF;
   g_boxes = 0;
   g_rangeQueries = 0;
   g_inversions = 0;
@@ -103,22 +108,25 @@ CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
 // point): by the inverter (invert); at prism coordinates already known (a crossing of the
 // prism, or a turning point's candidate on ψ = 0: b = p.uv, s = p.pad.y); or claimed
 // without inversion from uv p.uv near the point (on the chord between two curve points,
-// chordUv; at the closest hit): s by least squares and one Newton step in double
+// chordUv; at the closest hit): s by least squares and one Newton step in float
 // (newtonClaim). Either way makePoint's residual bounds the point's error.
-bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(dvec2) b, OBLONG_OUT(double) s) {
-  b = dvec2(p.uv);
-  s = double(p.pad.y);
+bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(vec2) b, OBLONG_OUT(float) s) {
+  b = p.uv;
+  s = p.pad.y;
   if (!invert && (p.pad.x == OBLONG_RP_PENDING_CROSSING || p.pad.x == OBLONG_RP_PENDING_TURN)) return true;
-  if (!invert) return newtonClaim(g_F, g_O, g_D, p.t, frameBary(g_F, dvec2(p.uv)), b, s);
+  if (!invert) {  // from uv's barycentrics (a starting point: float is enough)
+    OBLONG_PRECISE vec2 bc = vec2(g_F.bc) + vec2(g_F.bX) * p.uv.x + vec2(g_F.bY) * p.uv.y;
+    return newtonClaim(frameF(g_F), g_anchor, p.t, bc, b, s);
+  }
   ++g_inversions;
   OBLONG_PRECISE dvec3 X = g_O + p.t * g_D;
   vec2 bary;
   float h;
   OBLONG_HOOK(rpInvert)(vec3(X), bary, h);
-  b = dvec2(bary);
-  double nl = lengthD(frameN(g_F, b));
+  b = bary;
+  double nl = lengthD(frameN(g_F, dvec2(b)));
   if (!(nl > 0.0) || !finiteF(h)) return false;
-  s = double(h) / nl;
+  s = float(double(h) / nl);
   return true;
 }
 
@@ -137,9 +145,9 @@ bool curvePointAt(OBLONG_IN(CurvePoint) p, OBLONG_OUT(CurvePoint) outp) {
   outp.uv = vec2(0.0f);
   outp.pad = vec2(0.0f);
   for (int at = claim ? 0 : 1; at < (invert ? 2 : 1); ++at) {
-    dvec2 b;
-    double s;
-    if (coordsAt(p, at == 1, b, s) && makePoint(g_F, g_claim, g_O, g_D, p.t, b, s, outp) &&
+    vec2 b;
+    float s;
+    if (coordsAt(p, at == 1, b, s) && makePoint(g_F, g_claim, g_anchor, p.t, b, s, outp) &&
         (at == 1 || (how != OBLONG_RP_PENDING_CLAIM && how != OBLONG_RP_PENDING_TURN) ||
          double(outp.pad.x) + double(outp.pad.y) <= OBLONG_TRAV_CLAIM_PAD))
       return true;
@@ -813,6 +821,7 @@ int setupCurve() {
       tIn = max(first.t, g_tLo);
       tOut = min(last.t, g_tHi);
       if (!(tIn <= tOut)) return 0;
+      g_anchor = claimAnchor(g_F, g_O, g_D, 0.5 * (tIn + tOut));
       g_psi = psiMake(g_F, g_O, g_D);
       // With two crossings the ray runs inside the inflated prism from the first to the
       // last, so its curve's points there lie on the prism's base triangle, T grown by
