@@ -41,13 +41,21 @@ struct ClaimBounds {
 // XA = X(tA) − p0 computed in double and rounded to float once per ray and triangle (tA:
 // where the ray enters the prism), so that the float terms are of T's size wherever the
 // ray comes from. XAerr bounds each component of XA's distance from the exact
-// O + tA·D − p0 (the double arithmetic's 2^-50 of its terms, the rounding's 2^-24).
+// O + tA·D − p0 (the double arithmetic's 2^-50 of its terms, the rounding's 2^-24). The
+// residual's rounding bound (claimResidual) is linear in the claim's |u|, |v|, |s| and
+// |t − tA| with coefficients of the frame's and the ray's L1 norms, here times 10u and
+// rounded up: kE (e1, e2), kN (n0, f1, f2), kD (D), and the constant k0 (XA's magnitude
+// and three times XAerr).
 struct ClaimAnchor {
   double tA;
   vec3 XA, Df;  // Df: D rounded to float
   float XAerr;
+  vec2 kE;
+  vec3 kN;
+  float kD, k0;
 };
 OBLONG_INLINE double maxAbs3(OBLONG_IN(dvec3) v) { return max(max(abs(v.x), abs(v.y)), abs(v.z)); }
+
 OBLONG_INLINE ClaimAnchor claimAnchor(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) O, OBLONG_IN(dvec3) D, double tA) {
   ClaimAnchor A;
   A.tA = tA;
@@ -57,6 +65,18 @@ OBLONG_INLINE ClaimAnchor claimAnchor(OBLONG_IN(PatchFrame) F, OBLONG_IN(dvec3) 
   OBLONG_PRECISE double terms = maxAbs3(O) + abs(tA) * maxAbs3(D) + maxAbs3(F.p0);
   OBLONG_PRECISE double err = 0.5 * OBLONG_U2M23 * maxAbs3(X) + OBLONG_U2M50 * terms;
   A.XAerr = floatAbove(err, err);
+  // The seven coefficients from one call site (a shader inlines each call).
+  float c[7];
+  for (int k = 0; k < 7; ++k) {
+    dvec3 v = k == 0 ? F.e1 : k == 1 ? F.e2 : k == 2 ? F.n0 : k == 3 ? F.f1 : k == 4 ? F.f2 : k == 5 ? D : X;
+    OBLONG_PRECISE double m = 10.0 * (0.5 * OBLONG_U2M23) * (abs(v.x) + abs(v.y) + abs(v.z)) +
+                              (k == 6 ? 3.0 * double(A.XAerr) : 0.0);
+    c[k] = floatAbove(m, m);
+  }
+  A.kE = vec2(c[0], c[1]);
+  A.kN = vec3(c[2], c[3], c[4]);
+  A.kD = c[5];
+  A.k0 = c[6];
   return A;
 }
 
@@ -81,8 +101,10 @@ OBLONG_INLINE FrameF frameF(OBLONG_IN(PatchFrame) F) {
 // s·(n0 + f1·u + f2·v) is off by at most 6u of MG = |e1·u| + |e2·v| + |s|·(|n0| + |f1·u| +
 // |f2·v|); X = XA + dt·Df (dt = t − tA rounded) by 5u of MX = |XA| + |dt·Df| plus XAerr; the
 // difference by u of both: 7u·MG + 5u·MX + XAerr, and the Euclidean norm of the errors is
-// at most their sum over the three components. 10u covers that with the magnitudes' own
-// rounding; the bound itself is rounded up by 2^-20.
+// at most their sum over the three components, 10u·(|u|·‖e1‖₁ + |v|·‖e2‖₁ + |s|·(‖n0‖₁ +
+// |u|·‖f1‖₁ + |v|·‖f2‖₁) + ‖XA‖₁ + |dt|·‖D‖₁) + 3·XAerr with the anchor's coefficients
+// (10u covers the float magnitudes' own rounding); the bound itself is rounded up by
+// 2^-20.
 OBLONG_INLINE float claimResidual(OBLONG_IN(FrameF) R, OBLONG_IN(ClaimAnchor) A, double t, OBLONG_IN(vec2) b,
                                   float s) {
   float dt = float(t - A.tA);
@@ -93,10 +115,10 @@ OBLONG_INLINE float claimResidual(OBLONG_IN(FrameF) R, OBLONG_IN(ClaimAnchor) A,
   OBLONG_PRECISE vec3 G = eu + ev + s * N;
   OBLONG_PRECISE vec3 d = G - X;
   OBLONG_PRECISE float rf = sqrt(dotF(d, d));
-  OBLONG_PRECISE vec3 M = abs(eu) + abs(ev) + abs(s) * (abs(R.n0) + abs(fu) + abs(fv)) + abs(A.XA) + abs(dX);
-  OBLONG_PRECISE float r = (rf * (1.0f + float(OBLONG_U2M20)) + 10.0f * float(0.5 * OBLONG_U2M23) * (M.x + M.y + M.z) +
-                            3.0f * A.XAerr) *
-                           (1.0f + float(OBLONG_U2M20));
+  OBLONG_PRECISE float au = abs(b.x), av = abs(b.y);
+  OBLONG_PRECISE float err = A.k0 + au * A.kE.x + av * A.kE.y + abs(s) * (A.kN.x + au * A.kN.y + av * A.kN.z) +
+                             abs(dt) * A.kD;
+  OBLONG_PRECISE float r = (rf * (1.0f + float(OBLONG_U2M20)) + err) * (1.0f + float(OBLONG_U2M20));
   return r;
 }
 

@@ -70,6 +70,10 @@ void rpInit(OBLONG_IN(RayMargin) m, double maxP, double maxO, double a, double b
   g_anchor.XA = vec3(0.0f);
   g_anchor.Df = vec3(0.0f);
   g_anchor.XAerr = kInfF;
+  g_anchor.kE = vec2(0.0f);
+  g_anchor.kN = vec3(0.0f);
+  g_anchor.kD = 0.0f;
+  g_anchor.k0 = kInfF;
   g_boxes = 0;
   g_rangeQueries = 0;
   g_inversions = 0;
@@ -821,7 +825,6 @@ int setupCurve() {
       tIn = max(first.t, g_tLo);
       tOut = min(last.t, g_tHi);
       if (!(tIn <= tOut)) return 0;
-      g_anchor = claimAnchor(g_F, g_O, g_D, 0.5 * (tIn + tOut));
       g_psi = psiMake(g_F, g_O, g_D);
       // With two crossings the ray runs inside the inflated prism from the first to the
       // last, so its curve's points there lie on the prism's base triangle, T grown by
@@ -855,6 +858,7 @@ int setupCurve() {
     }
   }
   int ns = sortSplits(ts, bs, ss, m);
+  g_anchor = claimAnchor(g_F, g_O, g_D, 0.5 * (tIn + tOut));  // every claim comes after this
   // 3. Monotone pieces, between ψ's turning points, all their ends left pending, made
   // by pieceEnd when their piece is popped: the crossings' claims at their prism
   // coordinates; an end inside the prism (where the ray starts or ends) claimed near the
