@@ -39,8 +39,8 @@ struct ClaimBounds {
 
 // The ray near T in T's frame, for the claims in float: X(t) − p0 = XA + (t − tA)·D, with
 // XA = X(tA) − p0 computed in double and rounded to float once per ray and triangle (tA:
-// where the ray enters the prism), so that the float terms are of T's size wherever the
-// ray comes from. XAerr bounds each component of XA's distance from the exact
+// the middle of the ray's interval in the prism), so that the float terms are of T's size
+// wherever the ray comes from. XAerr bounds each component of XA's distance from the exact
 // O + tA·D − p0 (the double arithmetic's 2^-50 of its terms, the rounding's 2^-24). The
 // residual's rounding bound (claimResidual) is linear in the claim's |u|, |v|, |s| and
 // |t − tA| with coefficients of the frame's and the ray's L1 norms, here times 10u and
