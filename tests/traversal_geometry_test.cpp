@@ -241,7 +241,7 @@ TEST_CASE("a made curve point's stored uv and pad hold the ray point's exact pro
         const shared::ClaimAnchor A = shared::claimAnchor(F, O, D, t * (1.0 - 0.5 * U(rng) * U(rng)));
         shared::CurvePoint m;
         ++claims;
-        if (!shared::makePoint(F, K, A, t, b, sc, m)) continue;
+        if (!shared::makePoint(F, shared::frameF(F), K, A, t, b, sc, m)) continue;
         ++accepted;
         const double ex = double(std::abs(exactX - LD(m.uv.x))), ey = double(std::abs(exactY - LD(m.uv.y)));
         worst = std::max(worst, std::max(ex / double(m.pad.x), ey / double(m.pad.y)));

@@ -122,10 +122,12 @@ OBLONG_INLINE float claimResidual(OBLONG_IN(FrameF) R, OBLONG_IN(ClaimAnchor) A,
   return r;
 }
 
-// The curve point for the claim (b, s) at t; false when the claim lies outside the
-// analysed domain or its error bound is too large to trust the first-order bounds.
-OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, OBLONG_IN(ClaimAnchor) A, double t,
-                             OBLONG_IN(vec2) b, float s, OBLONG_OUT(CurvePoint) outp) {
+// The curve point for the claim (b, s) at t (R: F in float); false when the claim lies
+// outside the analysed domain or its error bound is too large to trust the first-order
+// bounds.
+OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(FrameF) R, OBLONG_IN(ClaimBounds) K,
+                             OBLONG_IN(ClaimAnchor) A, double t, OBLONG_IN(vec2) b, float s,
+                             OBLONG_OUT(CurvePoint) outp) {
   outp.t = t;
   outp.uv = vec2(0.0f);
   outp.pad = vec2(0.0f);
@@ -133,7 +135,7 @@ OBLONG_INLINE bool makePoint(OBLONG_IN(PatchFrame) F, OBLONG_IN(ClaimBounds) K, 
   double sd = double(s), dom = K.domainB;
   if (!(bd.x >= -dom && bd.y >= -dom && bd.x + bd.y <= 1.0 + dom)) return false;
   if (!(sd >= K.domainS0 && sd <= K.domainS1)) return false;
-  double r = double(claimResidual(frameF(F), A, t, b, s));
+  double r = double(claimResidual(R, A, t, b, s));
   OBLONG_PRECISE dvec2 db = K.kb * r * OBLONG_TRAV_RESIDUAL_SAFETY;
   if (!(db.x + db.y < OBLONG_TRAV_MAX_POINT_ERR) ||
       !(K.ks * r < OBLONG_TRAV_MAX_POINT_ERR * (K.domainS1 - K.domainS0) + OBLONG_TRAV_TINY))

@@ -114,13 +114,13 @@ CurvePoint pendingPoint(double t, OBLONG_IN(dvec2) g, double how) {
 // without inversion from uv p.uv near the point (on the chord between two curve points,
 // chordUv; at the closest hit): s by least squares and one Newton step in float
 // (newtonClaim). Either way makePoint's residual bounds the point's error.
-bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_OUT(vec2) b, OBLONG_OUT(float) s) {
+bool coordsAt(OBLONG_IN(CurvePoint) p, bool invert, OBLONG_IN(FrameF) R, OBLONG_OUT(vec2) b, OBLONG_OUT(float) s) {
   b = p.uv;
   s = p.pad.y;
   if (!invert && (p.pad.x == OBLONG_RP_PENDING_CROSSING || p.pad.x == OBLONG_RP_PENDING_TURN)) return true;
   if (!invert) {  // from uv's barycentrics (a starting point: float is enough)
     OBLONG_PRECISE vec2 bc = vec2(g_F.bc) + vec2(g_F.bX) * p.uv.x + vec2(g_F.bY) * p.uv.y;
-    return newtonClaim(frameF(g_F), g_anchor, p.t, bc, b, s);
+    return newtonClaim(R, g_anchor, p.t, bc, b, s);
   }
   ++g_inversions;
   OBLONG_PRECISE dvec3 X = g_O + p.t * g_D;
@@ -148,10 +148,11 @@ bool curvePointAt(OBLONG_IN(CurvePoint) p, OBLONG_OUT(CurvePoint) outp) {
   outp.t = p.t;
   outp.uv = vec2(0.0f);
   outp.pad = vec2(0.0f);
+  FrameF R = frameF(g_F);  // the frame's float copy, for the claim and its residual
   for (int at = claim ? 0 : 1; at < (invert ? 2 : 1); ++at) {
     vec2 b;
     float s;
-    if (coordsAt(p, at == 1, b, s) && makePoint(g_F, g_claim, g_anchor, p.t, b, s, outp) &&
+    if (coordsAt(p, at == 1, R, b, s) && makePoint(g_F, R, g_claim, g_anchor, p.t, b, s, outp) &&
         (at == 1 || (how != OBLONG_RP_PENDING_CLAIM && how != OBLONG_RP_PENDING_TURN) ||
          double(outp.pad.x) + double(outp.pad.y) <= OBLONG_TRAV_CLAIM_PAD))
       return true;
