@@ -45,7 +45,7 @@ namespace oblong {
 // (core/kernels/curve_point.h, shared with the Vulkan shaders), zero when made here: t
 // in double, uv in float, pad (float) covering uv's rounding.
 struct CurvePoint : shared::CurvePoint {
-  CurvePoint() : shared::CurvePoint{0.0f, vec2(0.0f), vec2(0.0f)} {}
+  CurvePoint() : shared::CurvePoint{0.0, vec2(0.0f), vec2(0.0f)} {}
 };
 
 // A monotone piece of the curve from a (front) to b (back).
